@@ -1,0 +1,116 @@
+"""The ``cayley-heyoka`` command: run scenes, summarise result files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .engine import run
+from .errors import IntegrationError, SceneError
+from .result import Result
+from .scene import load_scene
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``cayley-heyoka`` console script."""
+    parser = argparse.ArgumentParser(
+        prog="cayley-heyoka", description="High-accuracy Taylor integration of classical dynamics."
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    p_run = sub.add_parser("run", help="integrate a scene file")
+    p_run.add_argument("scene", type=Path, help="scene TOML file")
+    p_run.add_argument("--out", type=Path, help="write the result to this HDF5 file")
+    bar = p_run.add_mutually_exclusive_group()
+    bar.add_argument("--progress", action="store_true", default=None, help="show a progress bar")
+    bar.add_argument("--no-progress", dest="progress", action="store_false")
+    p_info = sub.add_parser("info", help="summarise a result file")
+    p_info.add_argument("result", type=Path)
+    args = parser.parse_args(argv)
+
+    if args.command == "info":
+        print(summary(Result.load(args.result)))
+        return 0
+    return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as exc:
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
+    show = sys.stderr.isatty() if args.progress is None else args.progress
+    bar = _progress_bar(scene) if show else None
+    try:
+        result = run(scene, progress=bar.update_to if bar else None)
+        code = 0
+    except IntegrationError as exc:
+        result, code = exc.result, 1
+        print(f"error: {exc}", file=sys.stderr)
+    finally:
+        if bar:
+            bar.close()
+    if args.out:
+        result.save(args.out)
+    print(summary(result))
+    if args.out:
+        print(f"result written to {args.out}")
+    return code
+
+
+def _progress_bar(scene):
+    from tqdm import tqdm
+
+    grid = scene.output.time_grid(scene.integrator.precision)
+    t0, t1 = float(grid[0]), float(grid[-1])
+
+    class Bar(tqdm):
+        def update_to(self, t: float) -> None:
+            self.n = round(t - t0, 6)
+            self.refresh() if self.n >= self.total else self.update(0)
+
+    return Bar(total=t1 - t0, unit="t", file=sys.stderr, mininterval=0.2, dynamic_ncols=True)
+
+
+def summary(result: Result) -> str:
+    """A one-screen account of a run: counts, timing, drifts, events."""
+    meta, counters = result.metadata, result.counters
+    title = result.scene.get("title") or "(untitled scene)"
+    lines = [title, ""]
+    status = "completed" if result.success else "STOPPED EARLY"
+    t_last = f"{float(result.t[-1]):.6g}" if len(result.t) else "-"
+    lines.append(f"  status        {status}: {result.message}")
+    lines.append(
+        f"  precision     {result.precision.name}, tolerance {meta.get('tolerance')}, "
+        f"order {meta.get('order')}"
+    )
+    lines.append(f"  outputs       {len(result.t)} times, last t = {t_last}")
+    for name, value in counters.items():
+        lines.append(f"  {name:<13} {value}")
+    wall = meta.get("wall_seconds", float("nan"))
+    compile_s = meta.get("compile_seconds", 0.0)
+    cached = " (compiled code from cache)" if meta.get("compiled_from_cache") else ""
+    lines.append(f"  wall time     {wall:.3f} s, of which compiling {compile_s:.3f} s{cached}")
+    steps = counters.get("steps", 0)
+    if steps and wall - compile_s > 0:
+        lines.append(f"  throughput    {steps / (wall - compile_s):,.0f} steps/s (incl. recording)")
+    if result.monitors:
+        lines.append("  monitors      final relative drift (conserved) or largest value:")
+        for name, arr in result.monitors.items():
+            if name in result.conserved and len(arr):
+                d = float(np.max(np.abs(result.drift(name)[-1])))
+                lines.append(f"    {name:<20} {d:.3e}")
+            elif len(arr):
+                lines.append(f"    {name:<20} largest |value| {float(np.max(np.abs(arr))):.3e}")
+    for name, log in result.events.items():
+        labels, counts = np.unique(log.label, return_counts=True)
+        detail = ", ".join(f"{lab}: {c}" for lab, c in zip(labels, counts, strict=True))
+        lines.append(f"  event {name:<12} {len(log)} occurrences ({detail or 'none'})")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

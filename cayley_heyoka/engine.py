@@ -1,0 +1,292 @@
+"""Build → compile (cached) → propagate → record: the one path every model family takes.
+
+Compiled integrators are cached in memory by the *structure* of the equations (the numbers
+live in runtime parameters), so running a scene again, or a scene differing only in its
+numbers, costs a copy of a template integrator instead of an LLVM compilation.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import heyoka as hy
+import numpy as np
+
+from .errors import IntegrationError
+from .families import FAMILIES
+from .model import Model
+from .precision import Precision
+from .result import EventLog, Result, versions
+from .scene import IntegratorOptions, Scene
+
+Progress = Callable[[float], None]
+
+#: Above this many characters of equations, compile in compact mode (see docs/engine.md).
+COMPACT_THRESHOLD = 60_000
+
+
+@dataclass
+class Compiled:
+    """A template integrator and the evaluator of outputs and monitors for one model structure."""
+
+    integrator: Any
+    evaluator: Any
+    compile_seconds: float
+
+
+_CACHE: dict[str, Compiled] = {}
+
+
+def clear_cache() -> None:
+    """Forget every compiled integrator (for measuring compile time)."""
+    _CACHE.clear()
+
+
+def cache_size() -> int:
+    """Number of compiled model structures held in memory."""
+    return len(_CACHE)
+
+
+def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, bool]:
+    """The compiled integrator for ``model``, from the cache when possible.
+
+    Returns the compiled object and whether it came from the cache.
+    """
+    key = _cache_key(model, options)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit, True
+    t0 = time.perf_counter()
+    prec = options.precision
+    compact = options.compact_mode
+    if compact is None:
+        # MPFR code is large per operation: without compact mode even a small system takes
+        # minutes to compile, while compact mode costs it little at run time.
+        compact = prec.kind == "real" or len(model.structure_key()) > COMPACT_THRESHOLD
+    kw = prec.heyoka_kwargs
+    ev_kw = {"fp_type": kw["fp_type"]} if kw else {}
+    nt_events = [
+        hy.nt_event(e.expression, _Recorder(), direction=_direction(e.direction), **ev_kw)
+        for e in model.events
+    ]
+    t_events = [
+        hy.t_event(e.expression, direction=_direction(e.direction), **ev_kw) for e in model.terminal
+    ]
+    extra = {}
+    if options.tolerance is not None:
+        extra["tol"] = prec.number(options.tolerance)
+    ta = hy.taylor_adaptive(
+        model.system,
+        prec.array(model.initial_state),
+        pars=prec.array(model.pars.values),
+        compact_mode=compact,
+        high_accuracy=options.high_accuracy,
+        nt_events=nt_events,
+        t_events=t_events,
+        **extra,
+        **kw,
+    )
+    outputs = _flat_outputs(model)
+    evaluator = hy.cfunc(
+        [e for _, e in outputs], [v for v, _ in model.system], compact_mode=compact, **kw
+    )
+    compiled = Compiled(ta, evaluator, time.perf_counter() - t0)
+    _CACHE[key] = compiled
+    return compiled, False
+
+
+def run(scene: Scene, progress: Progress | None = None) -> Result:
+    """Integrate a scene and record its outputs, events and monitors.
+
+    Parameters
+    ----------
+    scene
+        A validated :class:`~cayley_heyoka.scene.Scene`.
+    progress
+        Called with the current time after each step (slows stepping; for progress bars).
+
+    Returns
+    -------
+    Result
+        Every output time, or, if the run stops early, an :class:`IntegrationError` is raised
+        whose ``result`` holds what was computed up to the failure.
+    """
+    wall0 = time.perf_counter()
+    model = FAMILIES[scene.family].build(scene)
+    prec = scene.integrator.precision
+    compiled, cached = compile_model(model, scene.integrator)
+    ta = copy.deepcopy(compiled.integrator)
+    grid = scene.output.time_grid(prec)
+    ta.time = grid[0]
+    ta.state[:] = prec.array(model.initial_state)
+    ta.pars[:] = prec.array(model.pars.values)
+
+    callback = _ProgressCallback(progress) if progress else None
+    states, pars_rows = [], []
+    counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
+    status, message = 0, "every output time was reached"
+    i = 0
+    while i < len(grid):
+        if ta.time != grid[i]:
+            # Resume after a terminal event: reach the next output time first.
+            res = ta.propagate_until(grid[i], callback=callback)
+            outcome = res[0]
+            counters["steps"] += res[3]
+        else:
+            res = ta.propagate_grid(grid[i:], callback=callback)
+            outcome, out = res[0], res[-1]
+            counters["steps"] += res[3]
+            states.append(out)
+            # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
+            pars_rows += [ta.pars.copy() for _ in range(len(out))]
+            i += len(out)
+        code = int(outcome)
+        if outcome == hy.taylor_outcome.time_limit:
+            continue
+        if -len(model.terminal) <= code <= -1:
+            spec = model.terminal[-code - 1]
+            spec.handle(ta)
+            ta.reset_cooldowns()
+            counters[spec.counter] += 1
+            continue
+        status = -1
+        if outcome == hy.taylor_outcome.err_nf_state:
+            message = f"the state became non-finite after t = {ta.time}; results kept up to there"
+        elif outcome == hy.taylor_outcome.cb_stop:
+            message = f"stopped by the progress callback at t = {ta.time}"
+        else:
+            message = f"stopped at t = {ta.time} with outcome {outcome}"
+        break
+
+    state = np.concatenate(states) if states else np.empty((0, len(model.system)))
+    pars = np.array(pars_rows) if pars_rows else np.empty((0, len(model.pars)))
+    times = grid[: len(state)]
+    values = _evaluate(compiled.evaluator, model, state, pars, times, prec)
+    result = Result(
+        t=times,
+        variables={k: values[k] for k in model.outputs},
+        monitors={k: values[k] for k in model.monitors},
+        conserved=model.conserved,
+        events=_event_logs(model, ta, prec),
+        precision=prec,
+        status=status,
+        message=message,
+        counters=counters,
+        scene=scene.to_dict(),
+        metadata={
+            **versions(),
+            "wall_seconds": time.perf_counter() - wall0,
+            "compile_seconds": 0.0 if cached else compiled.compile_seconds,
+            "compiled_from_cache": cached,
+            "order": int(ta.order),
+            "tolerance": str(ta.tol),
+        },
+    )
+    if status != 0:
+        raise IntegrationError(message, result)
+    return result
+
+
+# ---------------------------------------------------------------------- internals
+class _Recorder:
+    """Non-terminal event callback: remembers each occurrence's time and direction."""
+
+    def __init__(self) -> None:
+        self.times: list[Any] = []
+        self.directions: list[int] = []
+
+    def __call__(self, ta: Any, t: Any, d_sgn: int) -> None:
+        self.times.append(t)
+        self.directions.append(int(d_sgn))
+
+
+class _ProgressCallback:
+    def __init__(self, progress: Progress) -> None:
+        self.progress = progress
+
+    def __call__(self, ta: Any) -> bool:
+        self.progress(float(ta.time))
+        return True
+
+
+def _direction(d: int) -> Any:
+    return {
+        0: hy.event_direction.any,
+        1: hy.event_direction.positive,
+        -1: hy.event_direction.negative,
+    }[d]
+
+
+def _cache_key(model: Model, options: IntegratorOptions) -> str:
+    text = "\n".join(
+        [
+            model.structure_key(),
+            model.output_key(),
+            options.precision.name,
+            str(options.tolerance),
+            str(options.compact_mode),
+            str(options.high_accuracy),
+        ]
+    )
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _flat_outputs(model: Model) -> list[tuple[str, Any]]:
+    flat = [(k, v) for k, v in model.outputs.items()]
+    for k, v in model.monitors.items():
+        if isinstance(v, list):
+            flat += [(f"{k}[{i}]", e) for i, e in enumerate(v)]
+        else:
+            flat.append((k, v))
+    return flat
+
+
+def _evaluate(
+    evaluator: Any,
+    model: Model,
+    state: np.ndarray,
+    pars: np.ndarray,
+    times: np.ndarray,
+    prec: Precision,
+) -> dict[str, np.ndarray]:
+    n = len(state)
+    if n == 0:
+        rows = np.empty((len(_flat_outputs(model)), 0))
+    else:
+        kwargs: dict[str, Any] = {"time": np.ascontiguousarray(times)}
+        if evaluator.nparams:
+            kwargs["pars"] = np.ascontiguousarray(pars[:, : evaluator.nparams].T)
+        rows = evaluator(np.ascontiguousarray(state.T), **kwargs)
+    out: dict[str, np.ndarray] = {}
+    k = 0
+    for name, value in list(model.outputs.items()) + list(model.monitors.items()):
+        width = len(value) if isinstance(value, list) else 1
+        block = rows[k : k + width]
+        out[name] = block.T.copy() if isinstance(value, list) else block[0].copy()
+        k += width
+    return out
+
+
+def _event_logs(model: Model, ta: Any, prec: Precision) -> dict[str, EventLog]:
+    gathered: dict[str, list[tuple[Any, int, str]]] = {}
+    recorded = ta.nt_events if model.events else []
+    for spec, ev in zip(model.events, recorded, strict=True):
+        rec = ev.callback
+        gathered.setdefault(spec.name, [])
+        gathered[spec.name] += [
+            (t, d, spec.label) for t, d in zip(rec.times, rec.directions, strict=True)
+        ]
+    logs = {}
+    for name, items in gathered.items():
+        items.sort(key=lambda x: x[0])
+        logs[name] = EventLog(
+            time=prec.array([x[0] for x in items]) if items else prec.array([]),
+            direction=np.array([x[1] for x in items], dtype=int),
+            label=np.array([x[2] for x in items], dtype=str),
+        )
+    return logs

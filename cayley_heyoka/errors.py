@@ -1,0 +1,36 @@
+"""Exceptions raised for bad input and for integrations that cannot go on."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .result import Result
+
+
+class SceneError(ValueError):
+    """A scene field violates a constraint.
+
+    Parameters
+    ----------
+    field
+        Dotted path of the offending field, e.g. ``"body.inertia"``.
+    constraint
+        What the field must satisfy, and what it was.
+    """
+
+    def __init__(self, field: str, constraint: str) -> None:
+        self.field = field
+        self.constraint = constraint
+        super().__init__(f"{field}: {constraint}")
+
+
+class IntegrationError(RuntimeError):
+    """An integration stopped before the last output time.
+
+    The results computed before the failure are kept in :attr:`result`.
+    """
+
+    def __init__(self, message: str, result: Result) -> None:
+        self.result = result
+        super().__init__(message)

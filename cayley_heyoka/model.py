@@ -1,0 +1,131 @@
+"""What a model family hands to the engine: equations, events, outputs and monitors.
+
+A family (rotation, orbit, ...) turns its part of a scene into a :class:`Model`. Everything
+downstream (compiling, propagating, recording, saving) works on this description only and
+knows nothing about rigid bodies or orbits.
+
+Numerical values that a scene may change (moments of inertia, force strengths, chart bases)
+enter the equations as heyoka runtime parameters ``par[i]``, never as literals. Two scenes
+that differ only in their numbers therefore share one compiled integrator, and every value is
+built in the target precision from its decimal text.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import heyoka as hy
+
+from .precision import Number
+
+Expr = hy.expression
+
+
+class ParTable:
+    """Runtime parameters of a model: ``add`` returns ``par[i]`` and remembers the value."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+        self.values: list[Any] = []
+
+    def add(self, name: str, value: Number) -> Expr:
+        """Allocate a parameter named ``name`` holding ``value``; returns ``par[i]``."""
+        if name in self.names:
+            raise ValueError(f"parameter {name!r} allocated twice")
+        self.names.append(name)
+        self.values.append(value)
+        return hy.par[len(self.names) - 1]
+
+    def index(self, name: str) -> int:
+        """Position of a parameter in the heyoka ``pars`` array."""
+        return self.names.index(name)
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+@dataclass
+class EventSpec:
+    """A non-terminal event: record each zero of ``expression``.
+
+    ``direction`` is 0 (any), +1 (upwards only) or -1 (downwards only); ``label`` says what
+    fired (e.g. the body axis), several specs may share one ``name``.
+    """
+
+    name: str
+    label: str
+    expression: Expr
+    direction: int = 0
+
+
+@dataclass
+class TerminalSpec:
+    """A terminal event that lets the family act on the integrator, then the run goes on.
+
+    ``handle(integrator)`` is called with the integrator stopped at the event; it may change
+    the state and the parameters (e.g. re-base an attitude chart). ``counter`` names the tally
+    of its occurrences in :attr:`Result.counters`.
+    """
+
+    expression: Expr
+    direction: int
+    handle: Callable[[Any], None]
+    counter: str
+
+
+@dataclass
+class Model:
+    """A model family's description of one scene, ready to compile.
+
+    Attributes
+    ----------
+    family
+        Name of the model family.
+    system
+        ``(variable, right-hand side)`` pairs, as accepted by ``heyoka.taylor_adaptive``.
+    initial_state
+        Values of the state variables at the start time, in the order of ``system``.
+    pars
+        Runtime parameters and their values.
+    outputs
+        Result variables: name -> expression of the state, the parameters and time. They are
+        evaluated on the output grid in the run's precision.
+    monitors
+        Monitored quantities: name -> expression or list of expressions (a vector).
+    conserved
+        Monitors that the exact flow conserves for this scene.
+    events, terminal
+        Recorded and acting events.
+    """
+
+    family: str
+    system: list[tuple[Expr, Expr]]
+    initial_state: Sequence[Any]
+    pars: ParTable
+    outputs: dict[str, Expr]
+    monitors: dict[str, Expr | list[Expr]] = field(default_factory=dict)
+    conserved: tuple[str, ...] = ()
+    events: list[EventSpec] = field(default_factory=list)
+    terminal: list[TerminalSpec] = field(default_factory=list)
+
+    @property
+    def state_names(self) -> list[str]:
+        """Names of the integrated variables."""
+        return [str(v) for v, _ in self.system]
+
+    def structure_key(self) -> str:
+        """Text that identifies the compiled code: equations and events, not the numbers."""
+        parts = [self.family]
+        parts += [f"{v}'={rhs}" for v, rhs in self.system]
+        parts += [f"event {e.name}/{e.label}/{e.direction}: {e.expression}" for e in self.events]
+        parts += [f"terminal {e.counter}/{e.direction}: {e.expression}" for e in self.terminal]
+        return "\n".join(parts)
+
+    def output_key(self) -> str:
+        """Text that identifies the compiled evaluator of outputs and monitors."""
+        parts = [self.family, ",".join(self.state_names)]
+        parts += [f"{k}={v}" for k, v in self.outputs.items()]
+        parts += [f"{k}={v}" for k, v in self.monitors.items()]
+        return "\n".join(parts)

@@ -1,0 +1,242 @@
+"""The result of a run: times, named variables, events, monitored quantities; HDF5 in and out.
+
+The shape follows :func:`scipy.integrate.solve_ivp`'s result (``t``, ``y``, ``status``,
+``message``, ``success``) so it feels familiar, with names on top: ``result["p"]``.
+
+Arrays hold numbers of the run's precision (``float``, heyoka ``real128`` or ``real``). In the
+HDF5 file, double arrays are stored as float64 and extended-precision arrays as decimal text
+with enough digits to load back bit-for-bit.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from importlib import metadata as _metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .precision import Precision
+
+FORMAT_VERSION = 1
+
+
+@dataclass
+class EventLog:
+    """Occurrences of one event.
+
+    Attributes
+    ----------
+    time
+        Event times, in the run's precision.
+    direction
+        +1 where the event function crossed zero upwards, -1 downwards.
+    label
+        What fired, e.g. the body axis ``"x1"`` for an invariable-plane crossing.
+    """
+
+    time: np.ndarray
+    direction: np.ndarray
+    label: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def where(self, label: str) -> np.ndarray:
+        """Times of the occurrences carrying ``label``."""
+        return self.time[self.label == label]
+
+
+@dataclass
+class Result:
+    """The outcome of :func:`cayley_heyoka.run`.
+
+    Attributes
+    ----------
+    t
+        Output times, in the run's precision.
+    variables
+        Each state variable and derived coordinate on the output grid, by name.
+    monitors
+        Monitored quantities on the output grid (shape ``(n,)`` or ``(n, 3)``).
+    conserved
+        Names of the monitors that the exact flow conserves for this scene.
+    events
+        Event occurrences by event name.
+    precision
+        The floating-point precision of the run.
+    status
+        0 if every output time was reached, -1 if the run stopped early.
+    message
+        Why the run ended.
+    counters
+        Integer tallies: ``steps``, ``rebasings`` (chart changes of the attitude), ...
+    scene
+        The scene, as the plain dictionary it can be rebuilt from.
+    metadata
+        Versions, wall time and compile time.
+    """
+
+    t: np.ndarray
+    variables: dict[str, np.ndarray]
+    monitors: dict[str, np.ndarray] = field(default_factory=dict)
+    conserved: tuple[str, ...] = ()
+    events: dict[str, EventLog] = field(default_factory=dict)
+    precision: Precision = field(default_factory=Precision)
+    status: int = 0
+    message: str = ""
+    counters: dict[str, int] = field(default_factory=dict)
+    scene: dict[str, Any] = field(default_factory=dict)
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        """Whether every output time was reached."""
+        return self.status == 0
+
+    @property
+    def names(self) -> list[str]:
+        """Variable names, in the row order of :attr:`y`."""
+        return list(self.variables)
+
+    @property
+    def y(self) -> np.ndarray:
+        """The variables stacked as rows, shape ``(len(names), len(t))``, like ``solve_ivp``."""
+        return np.array([self.variables[k] for k in self.variables])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        if name in self.variables:
+            return self.variables[name]
+        if name in self.monitors:
+            return self.monitors[name]
+        known = ", ".join([*self.variables, *self.monitors])
+        raise KeyError(f"no variable or monitor named {name!r}; known: {known}")
+
+    def drift(self, name: str) -> np.ndarray:
+        """Relative drift of a monitored quantity from its initial value.
+
+        Scalars: ``(m(t) - m(0)) / |m(0)|``; vectors: each component's change divided by the
+        initial vector's norm. Where the initial value is zero the change itself is returned.
+        """
+        m = self.monitors[name]
+        if len(m) == 0:
+            return m
+        m0 = m[0]
+        scale = np.sqrt(np.sum(m0 * m0)) if m.ndim > 1 else abs(m0)
+        return (m - m0) / scale if scale != 0 else m - m0
+
+    def final_drifts(self) -> dict[str, float]:
+        """Relative drift at the last output time of each conserved monitor (largest component)."""
+        out = {}
+        for name in self.conserved:
+            d = self.drift(name)
+            out[name] = float(np.max(np.abs(d[-1]))) if len(d) else float("nan")
+        return out
+
+    # ------------------------------------------------------------------ HDF5
+    def save(self, path: str | Path) -> None:
+        """Write the result to an HDF5 file (see ``docs/results.md`` for the layout)."""
+        import h5py
+
+        prec = self.precision
+        with h5py.File(path, "w") as f:
+            f.attrs["format"] = "cayley_heyoka.result"
+            f.attrs["format_version"] = FORMAT_VERSION
+            f.attrs["precision"] = json.dumps(prec.to_spec())
+            f.attrs["status"] = self.status
+            f.attrs["message"] = self.message
+            f.attrs["counters"] = json.dumps(self.counters)
+            f.attrs["conserved"] = json.dumps(list(self.conserved))
+            f.attrs["scene"] = json.dumps(self.scene)
+            f.attrs["metadata"] = json.dumps(self.metadata)
+            _write_array(f, "t", self.t, prec)
+            for group, arrays in (("variables", self.variables), ("monitors", self.monitors)):
+                g = f.create_group(group)
+                g.attrs["order"] = json.dumps(list(arrays))
+                for name, arr in arrays.items():
+                    _write_array(g, name, arr, prec)
+            ge = f.create_group("events")
+            ge.attrs["order"] = json.dumps(list(self.events))
+            for name, log in self.events.items():
+                g = ge.create_group(name)
+                _write_array(g, "time", log.time, prec)
+                g.create_dataset("direction", data=np.asarray(log.direction, dtype=np.int8))
+                g.create_dataset(
+                    "label", data=np.asarray(log.label, dtype=object), dtype=_str_dtype()
+                )
+
+    @classmethod
+    def load(cls, path: str | Path) -> Result:
+        """Read a result written by :meth:`save`; extended-precision values load exactly."""
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            if f.attrs.get("format") != "cayley_heyoka.result":
+                raise ValueError(f"{path}: not a cayley_heyoka result file")
+            prec = Precision.from_spec(json.loads(f.attrs["precision"]))
+            variables = {
+                k: _read_array(f["variables"][k], prec)
+                for k in json.loads(f["variables"].attrs["order"])
+            }
+            monitors = {
+                k: _read_array(f["monitors"][k], prec)
+                for k in json.loads(f["monitors"].attrs["order"])
+            }
+            events = {}
+            for name in json.loads(f["events"].attrs["order"]):
+                g = f["events"][name]
+                events[name] = EventLog(
+                    time=_read_array(g["time"], prec),
+                    direction=g["direction"][()].astype(int),
+                    label=np.array([_text(s) for s in g["label"][()]], dtype=str),
+                )
+            return cls(
+                t=_read_array(f["t"], prec),
+                variables=variables,
+                monitors=monitors,
+                conserved=tuple(json.loads(f.attrs["conserved"])),
+                events=events,
+                precision=prec,
+                status=int(f.attrs["status"]),
+                message=str(f.attrs["message"]),
+                counters=json.loads(f.attrs["counters"]),
+                scene=json.loads(f.attrs["scene"]),
+                metadata=json.loads(f.attrs["metadata"]),
+            )
+
+
+def versions() -> dict[str, str]:
+    """Versions of this library and of the engine, for result metadata."""
+    import heyoka
+
+    try:
+        ours = _metadata.version("cayley_heyoka")
+    except _metadata.PackageNotFoundError:  # running from a source tree
+        ours = "unknown"
+    return {"cayley_heyoka": ours, "heyoka": heyoka.__version__, "numpy": np.__version__}
+
+
+def _str_dtype():
+    import h5py
+
+    return h5py.string_dtype(encoding="utf-8")
+
+
+def _write_array(group, name: str, arr: np.ndarray, prec: Precision) -> None:
+    if prec.kind == "double":
+        group.create_dataset(name, data=np.asarray(arr, dtype=np.float64))
+    else:
+        ds = group.create_dataset(name, data=prec.to_text(arr), dtype=_str_dtype())
+        ds.attrs["encoding"] = "decimal"
+
+
+def _read_array(ds, prec: Precision) -> np.ndarray:
+    if ds.attrs.get("encoding") == "decimal":
+        return prec.from_text(ds[()])
+    return np.asarray(ds[()], dtype=np.float64)
+
+
+def _text(s: Any) -> str:
+    return s.decode() if isinstance(s, bytes) else str(s)

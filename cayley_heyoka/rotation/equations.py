@@ -1,0 +1,105 @@
+"""Euler's equations, the kinematics of the attitude, and torques from a force function.
+
+Symbols (Cayley 1843, ``../shared/notes/cayley1843.md`` §3–§5):
+
+* ``A, B, C`` — principal moments of inertia; ``p, q, r`` — body-frame angular velocity.
+* ``λ, μ, ν`` — Cayley–Rodrigues parameters, ``κ = 1 + λ² + μ² + ν²``; ``w, x, y, z`` — quaternion.
+* ``V`` — the *force function* (work function), minus the potential energy; the conserved
+  energy is ``T − V`` with ``T = ½(Ap² + Bq² + Cr²)``.
+* ``N`` — the body-frame torque. Cayley's formula gives it from ``∂V/∂λ, ∂V/∂μ, ∂V/∂ν``:
+  ``N = ½ Mᵀ ∇V`` with ``M = I + [ρ]× + ρρᵀ``.
+
+Every function returns heyoka expressions (or lists of them) built from the arguments, like
+``heyoka.model``: a user can take them and build an integrator directly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import heyoka as hy
+
+from .attitude import Matrix, quaternion_multiply
+
+Expr = hy.expression
+
+
+def euler_rates(
+    inertia: Sequence[Expr], rates: Sequence[Expr], torque: Sequence[Expr] | None = None
+) -> list[Expr]:
+    """Right-hand sides of Euler's equations ``A ṗ + (C − B) q r = N₁`` and cyclically."""
+    A, B, C = inertia
+    p, q, r = rates
+    rhs = [(B - C) * q * r, (C - A) * r * p, (A - B) * p * q]
+    if torque is not None:
+        rhs = [rhs[i] + torque[i] for i in range(3)]
+    return [rhs[0] / A, rhs[1] / B, rhs[2] / C]
+
+
+def rodrigues_kinematics(rho: Sequence[Expr], rates: Sequence[Expr]) -> list[Expr]:
+    """Cayley's kinematic equations ``2λ′ = (1 + λ²) p + (λμ − ν) q + (νλ + μ) r`` etc."""
+    lam, mu, nu = rho
+    p, q, r = rates
+    return [
+        0.5 * ((1 + lam * lam) * p + (lam * mu - nu) * q + (nu * lam + mu) * r),
+        0.5 * ((lam * mu + nu) * p + (1 + mu * mu) * q + (mu * nu - lam) * r),
+        0.5 * ((nu * lam - mu) * p + (mu * nu + lam) * q + (1 + nu * nu) * r),
+    ]
+
+
+def quaternion_kinematics(quat: Sequence[Expr], rates: Sequence[Expr]) -> list[Expr]:
+    """``q̇ = ½ q ⊗ (0, ω)`` with ω in body axes."""
+    return [0.5 * e for e in quaternion_multiply(quat, [0, *rates])]
+
+
+def cayley_torque(potential: Expr, rho: Sequence[Expr]) -> list[Expr]:
+    """Body torque from the force function by Cayley's formula (1843, §4).
+
+    ``N₁ = ½{(1 + λ²) V_λ + (λμ + ν) V_μ + (νλ − μ) V_ν}``,
+    ``N₂ = ½{(λμ − ν) V_λ + (1 + μ²) V_μ + (μν + λ) V_ν}``,
+    ``N₃ = ½{(νλ + μ) V_λ + (μν − λ) V_μ + (1 + ν²) V_ν}``, the partials taken symbolically.
+    """
+    lam, mu, nu = rho
+    Vl, Vm, Vn = (hy.diff(potential, v) for v in rho)
+    return [
+        0.5 * ((1 + lam * lam) * Vl + (lam * mu + nu) * Vm + (nu * lam - mu) * Vn),
+        0.5 * ((lam * mu - nu) * Vl + (1 + mu * mu) * Vm + (mu * nu + lam) * Vn),
+        0.5 * ((nu * lam + mu) * Vl + (mu * nu - lam) * Vm + (1 + nu * nu) * Vn),
+    ]
+
+
+def matrix_torque(potential: Expr, placeholders: Matrix, R: Matrix) -> list[Expr]:
+    """Body torque from a force function of the direction cosines.
+
+    ``potential`` is V written in the nine variables ``placeholders`` standing for the entries
+    of ``R``. A virtual body rotation ``δR = R [δφ]×`` changes V by ``δφ · N``, so
+    ``N = Σᵢ (∂V/∂Rᵢ.) × Rᵢ.`` over the rows of the gradient and of ``R``. This needs no chart
+    and is regular at every attitude: it is the quaternion formulation's route to the torque
+    and an independent check of Cayley's formula.
+    """
+    subs = {str(placeholders[i][j]): R[i][j] for i in range(3) for j in range(3)}
+    grad = [
+        [hy.subs(hy.diff(potential, placeholders[i][j]), subs) for j in range(3)] for i in range(3)
+    ]
+    torque = [0, 0, 0]
+    for i in range(3):
+        gx, gy, gz = grad[i]
+        rx, ry, rz = R[i]
+        torque = [
+            torque[0] + gy * rz - gz * ry,
+            torque[1] + gz * rx - gx * rz,
+            torque[2] + gx * ry - gy * rx,
+        ]
+    return torque
+
+
+def kinetic_energy(inertia: Sequence[Expr], rates: Sequence[Expr]) -> Expr:
+    """``T = ½(Ap² + Bq² + Cr²)``."""
+    A, B, C = inertia
+    p, q, r = rates
+    return 0.5 * (A * p * p + B * q * q + C * r * r)
+
+
+def body_momentum(inertia: Sequence[Expr], rates: Sequence[Expr]) -> list[Expr]:
+    """Angular momentum in body axes, ``(Ap, Bq, Cr)``."""
+    return [inertia[i] * rates[i] for i in range(3)]

@@ -1,0 +1,227 @@
+"""Build the heyoka system of a rigid-body scene, with only the terms the scene needs.
+
+* Rates only (``formulation = "none"``): Euler's three equations.
+* Rodrigues: Euler's equations, Cayley's kinematics for the chart parameters (λ, μ, ν), the
+  torque by Cayley's formula from ``∂V/∂λ, ∂V/∂μ, ∂V/∂ν`` (taken by heyoka), and the chart
+  re-basing event (:mod:`.charts`).
+* Quaternion: Euler's equations, ``q̇ = ½ q ⊗ (0, ω)``, the torque by the matrix gradient of V.
+
+No torque term is compiled for a torque-free scene, and no attitude for a rates-only one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import heyoka as hy
+import numpy as np
+
+from ..errors import SceneError
+from ..expressions import parse_expression
+from ..model import EventSpec, Model, ParTable, TerminalSpec
+from ..scene import Scene
+from . import attitude as att
+from . import equations as eq
+from .charts import RodriguesAtlas, kappa_limit
+from .forces import ForceContext, HeavyTop
+from .scene import RigidBody
+
+AXES = ("x1", "y1", "z1")
+MONITORS = ("energy", "momentum_squared", "momentum_space", "momentum_vertical", "orthogonality")
+
+
+def build_model(scene: Scene) -> Model:
+    """Turn a validated rigid-body scene into a :class:`~cayley_heyoka.model.Model`."""
+    body: RigidBody = scene.model
+    prec = scene.integrator.precision
+    pars = ParTable()
+    inertia = [pars.add(name, body.inertia[i]) for i, name in enumerate("ABC")]
+    rates = list(hy.make_vars("p", "q", "r"))
+    q0 = body.initial_quaternion(prec)
+    rates0 = list(prec.array(body.rates))
+    outputs: dict[str, Any] = dict(zip("pqr", rates, strict=True))
+
+    momentum = None
+    if body.torque_free:
+        L0 = [m * w for m, w in zip(prec.array(body.inertia), rates0, strict=True)]
+        momentum = np.array(att.matvec(att.quaternion_to_matrix(list(q0)), L0))
+    attitude = None
+    if body.formulation == "rodrigues":
+        attitude = _rodrigues(body, prec, pars, rates, q0, momentum, inertia)
+    elif body.formulation == "quaternion":
+        attitude = _quaternion(body, pars, rates, q0, momentum, inertia)
+
+    torque = attitude.torque if attitude else None
+    system = list(zip(rates, eq.euler_rates(inertia, rates, torque), strict=True))
+    initial = rates0
+    terminal = []
+    if attitude:
+        system += list(zip(attitude.variables, attitude.rhs, strict=True))
+        initial = initial + list(attitude.initial)
+        outputs.update(attitude.outputs)
+        terminal = attitude.terminal
+
+    monitors, conserved = _monitors(body, inertia, rates, attitude, pars)
+    wanted = scene.output.monitors
+    if wanted is not None:
+        for name in wanted:
+            if name not in monitors:
+                why = "needs an attitude" if name in MONITORS else f"is unknown; known: {MONITORS}"
+                raise SceneError("output.monitors", f"{name!r} {why} (available: {list(monitors)})")
+        monitors = {k: v for k, v in monitors.items() if k in wanted}
+        conserved = tuple(k for k in conserved if k in wanted)
+
+    events = _events(scene, body, inertia, rates, attitude, outputs, pars)
+    return Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
+
+
+class _Attitude:
+    """The attitude part of the system: variables, right-hand sides, torque, outputs."""
+
+    def __init__(self) -> None:
+        self.variables: list[Any] = []
+        self.rhs: list[Any] = []
+        self.initial: list[Any] = []
+        self.torque: list[Any] | None = None
+        self.potential: Any = None
+        self.R: list[list[Any]] = []
+        self.outputs: dict[str, Any] = {}
+        self.terminal: list[TerminalSpec] = []
+        # Builds the invariable-plane event functions of a torque-free body (allocating their
+        # parameters only when the scene asks for the events).
+        self.plane_events: Callable[[], list[Any]] | None = None
+
+
+def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
+    a = _Attitude()
+    rho = list(hy.make_vars("lambda", "mu", "nu"))
+    kmax_text = kappa_limit(body.max_chart_angle, prec)
+    # Start in the identity chart when the initial attitude fits in it, so that a short run
+    # integrates Cayley's own parameters; otherwise start from a chart based at the attitude.
+    fits = q0[0] * q0[0] * prec.number(kmax_text) > 1
+    one, zero = prec.number(1), prec.number(0)
+    base = np.array([one, zero, zero, zero]) if fits else q0
+    rho0 = att.quaternion_to_rodrigues(list(q0)) if fits else [zero] * 3
+    atlas = RodriguesAtlas(pars, slice(3, 6), base)
+    kmax = pars.add("chart.kappa_max", kmax_text)
+
+    qb = atlas.base_pars
+    R_base = att.quaternion_to_matrix(qb)
+    R = att.matmul(R_base, att.rodrigues_to_matrix(rho))
+    q_total = att.quaternion_multiply(qb, [1, *rho])  # norm √κ: the chart's w is 1/√κ
+    rho_total = [q_total[i] / q_total[0] for i in (1, 2, 3)]
+    norm = hy.sqrt(att.kappa(rho))
+
+    a.variables, a.initial, a.R = rho, rho0, R
+    a.rhs = eq.rodrigues_kinematics(rho, rates)
+    if body.forces:
+        a.potential = _potential(body, R, rho_total, inertia, pars)
+        a.torque = eq.cayley_torque(a.potential, rho)
+    a.outputs = dict(zip(("lambda", "mu", "nu"), rho_total, strict=True))
+    a.outputs.update(zip(("qw", "qx", "qy", "qz"), [c / norm for c in q_total], strict=True))
+    a.terminal = [TerminalSpec(att.kappa(rho) - kmax, 1, atlas.rebase, "rebasings")]
+    if momentum is not None:
+
+        def plane_events():
+            kR = att.rodrigues_kappa_matrix(rho)
+            gb = atlas.momentum_in_chart_base(momentum)
+            return [sum(kR[i][j] * gb[i] for i in range(3)) for j in range(3)]
+
+        a.plane_events = plane_events
+    return a
+
+
+def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
+    a = _Attitude()
+    quat = list(hy.make_vars("qw", "qx", "qy", "qz"))
+    R = att.quaternion_to_matrix(quat)
+    a.variables, a.initial, a.R = quat, list(q0), R
+    a.rhs = eq.quaternion_kinematics(quat, rates)
+    if body.forces:
+        names = [[hy.expression(f"R{i + 1}{j + 1}__") for j in range(3)] for i in range(3)]
+        V = _potential(body, names, _rodrigues_of_matrix(names), inertia, pars)
+        a.torque = eq.matrix_torque(V, names, R)
+        a.potential = hy.subs(V, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
+    a.outputs = dict(
+        zip(("lambda", "mu", "nu"), [quat[i] / quat[0] for i in (1, 2, 3)], strict=True)
+    )
+    a.outputs.update(zip(("qw", "qx", "qy", "qz"), quat, strict=True))
+    if momentum is not None:
+
+        def plane_events():
+            g = [pars.add(f"momentum_space[{i}]", momentum[i]) for i in range(3)]
+            return [sum(R[i][j] * g[i] for i in range(3)) for j in range(3)]
+
+        a.plane_events = plane_events
+    return a
+
+
+def _potential(body: RigidBody, R, rho_total, inertia, pars: ParTable):
+    ctx = ForceContext(R, rho_total, inertia, pars)
+    terms = [force.potential(ctx) for force in body.forces]
+    return terms[0] if len(terms) == 1 else hy.sum(terms)
+
+
+def _rodrigues_of_matrix(R):
+    upsilon = 1 + R[0][0] + R[1][1] + R[2][2]
+    return [
+        (R[2][1] - R[1][2]) / upsilon,
+        (R[0][2] - R[2][0]) / upsilon,
+        (R[1][0] - R[0][1]) / upsilon,
+    ]
+
+
+def _monitors(body: RigidBody, inertia, rates, attitude: _Attitude | None, pars: ParTable):
+    L = eq.body_momentum(inertia, rates)
+    T = eq.kinetic_energy(inertia, rates)
+    time_dependent = any(f.time_dependent for f in body.forces)
+    monitors: dict[str, Any] = {}
+    monitors["energy"] = (
+        T - attitude.potential if attitude and attitude.potential is not None else T
+    )
+    monitors["momentum_squared"] = L[0] * L[0] + L[1] * L[1] + L[2] * L[2]
+    conserved = [] if time_dependent else ["energy"]
+    if body.torque_free:
+        conserved.append("momentum_squared")
+    if attitude:
+        R = attitude.R
+        monitors["momentum_space"] = att.matvec(R, L)
+        if body.torque_free:
+            conserved.append("momentum_space")
+        tops = [f for f in body.forces if isinstance(f, HeavyTop)]
+        if tops and len(tops) == len(body.forces):
+            up = [hy.par[pars.index(f"heavy_top.up[{i}]")] for i in range(3)]
+            g = monitors["momentum_space"]
+            monitors["momentum_vertical"] = sum(up[i] * g[i] for i in range(3))
+            conserved.append("momentum_vertical")
+        RtR = att.matmul(att.transpose(R), R)
+        defect = [RtR[i][j] - (1 if i == j else 0) for i in range(3) for j in range(3)]
+        monitors["orthogonality"] = hy.sqrt(hy.sum([d * d for d in defect]))
+    return monitors, tuple(conserved)
+
+
+def _events(scene: Scene, body, inertia, rates, attitude, outputs, pars) -> list[EventSpec]:
+    events: list[EventSpec] = []
+    for name in scene.output.events:
+        if name == "invariable_plane":
+            if attitude is not None and attitude.plane_events is not None:
+                exprs = attitude.plane_events()
+            else:
+                # With a torque, or without attitude, the plane is the one perpendicular to the
+                # instantaneous L: body axis j lies in it exactly when (Ap, Bq, Cr)_j = 0.
+                exprs = list(rates)
+            events += [EventSpec(name, AXES[j], exprs[j]) for j in range(3)]
+        elif name in scene.events:
+            ev = scene.events[name]
+            symbols = dict(outputs)
+            symbols.update(zip("ABC", inertia, strict=True))
+            expr = parse_expression(ev.expression, symbols, pars, f"events.{name}.expression")
+            events.append(EventSpec(name, name, expr, ev.direction))
+        else:
+            known = ["invariable_plane", *scene.events]
+            raise SceneError("output.events", f"unknown event {name!r}; known: {known}")
+    for name in scene.events:
+        if name not in scene.output.events:
+            raise SceneError(f"events.{name}", "is defined but not listed in output.events")
+    return events

@@ -1,0 +1,152 @@
+"""The rigid-body tables of a scene: ``[body]``, ``[initial]``, ``[attitude]``, ``[forces.*]``."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import SceneError
+from ..precision import Number, Precision, exact_fraction
+from ..scene import check_keys, number, vector
+from . import attitude as att
+from .forces import parse_forces
+
+FORMULATIONS = ("rodrigues", "quaternion", "none")
+_UNIT_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """A body turning about a fixed point.
+
+    Attributes
+    ----------
+    inertia
+        Principal moments (A, B, C): positive, finite, each at most the sum of the others.
+    rates
+        Body-frame angular velocity (p, q, r) at the start time.
+    attitude
+        ``(kind, value)`` with kind ``"rodrigues"``, ``"quaternion"`` or ``"matrix"``, or None
+        for the identity.
+    formulation
+        How the attitude is integrated: ``"rodrigues"`` (Cayley's parameters, re-based through
+        rotation angles near π), ``"quaternion"``, or ``"none"`` (rates only).
+    max_chart_angle
+        Rotation angle (degrees) of the Rodrigues chart at which it is re-based.
+    forces
+        Force functions, each a :mod:`.forces` object.
+    """
+
+    inertia: tuple[Number, Number, Number]
+    rates: tuple[Number, Number, Number]
+    attitude: tuple[str, Any] | None
+    formulation: str
+    max_chart_angle: Number
+    forces: tuple
+
+    @classmethod
+    def parse(cls, tables: Mapping[str, Any]) -> RigidBody:
+        body = tables.get("body", {})
+        check_keys(body, ["inertia"], "body")
+        if "inertia" not in body:
+            raise SceneError("body.inertia", "is required: the principal moments [A, B, C]")
+        inertia = vector(body["inertia"], "body.inertia", 3)
+        _check_inertia(inertia)
+
+        initial = tables.get("initial", {})
+        check_keys(initial, ["rates", "rodrigues", "quaternion", "matrix"], "initial")
+        if "rates" not in initial:
+            raise SceneError("initial.rates", "is required: the body rates [p, q, r]")
+        rates = vector(initial["rates"], "initial.rates", 3)
+        given = [k for k in ("rodrigues", "quaternion", "matrix") if k in initial]
+        if len(given) > 1:
+            raise SceneError("initial", f"give one attitude, not several: {given}")
+        attitude = _parse_attitude(given[0], initial[given[0]]) if given else None
+
+        forces = parse_forces(tables.get("forces", {}))
+        opts = tables.get("attitude", {})
+        check_keys(opts, ["formulation", "max_chart_angle"], "attitude")
+        default = "rodrigues" if (attitude is not None or forces) else "none"
+        formulation = opts.get("formulation", default)
+        if formulation not in FORMULATIONS:
+            raise SceneError(
+                "attitude.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
+            )
+        if formulation == "none" and forces:
+            raise SceneError(
+                "attitude.formulation",
+                "'none' cannot carry a force function: the torque depends on the attitude",
+            )
+        angle = number(opts.get("max_chart_angle", 160), "attitude.max_chart_angle")
+        if not 0 < exact_fraction(angle) < 180:
+            raise SceneError(
+                "attitude.max_chart_angle", f"must be in (0, 180) degrees, got {angle}"
+            )
+        return cls(inertia, rates, attitude, formulation, angle, forces)
+
+    @property
+    def torque_free(self) -> bool:
+        return not self.forces
+
+    def initial_quaternion(self, precision: Precision) -> np.ndarray:
+        """The initial attitude as a unit quaternion (w ≥ 0) in the target precision."""
+        one = precision.number(1)
+        if self.attitude is None:
+            return np.array([one, 0 * one, 0 * one, 0 * one])
+        kind, value = self.attitude
+        if kind == "rodrigues":
+            return np.array(att.rodrigues_to_quaternion(list(precision.array(value))))
+        if kind == "quaternion":
+            q = precision.array(value)
+            q = q / np.sqrt(np.sum(q * q))
+            return -q if q[0] < 0 else q
+        R = [list(precision.array(row)) for row in value]
+        return np.array(att.matrix_to_quaternion(R))
+
+
+def _check_inertia(inertia: tuple[Number, Number, Number]) -> None:
+    A, B, C = (exact_fraction(v) for v in inertia)
+    for name, v in zip("ABC", (A, B, C), strict=True):
+        if v <= 0:
+            raise SceneError("body.inertia", f"moment {name} must be > 0, got {v}")
+    for (n1, a), (n2, b), (n3, c) in (
+        (("A", A), ("B", B), ("C", C)),
+        (("B", B), ("C", C), ("A", A)),
+        (("C", C), ("A", A), ("B", B)),
+    ):
+        if a + b < c:
+            raise SceneError(
+                "body.inertia",
+                f"violates the triangle inequality {n1} + {n2} >= {n3} "
+                f"({float(a)} + {float(b)} < {float(c)}): no rigid body has these moments",
+            )
+
+
+def _parse_attitude(kind: str, value: Any) -> tuple[str, Any]:
+    where = f"initial.{kind}"
+    if kind == "rodrigues":
+        return kind, vector(value, where, 3)
+    if kind == "quaternion":
+        q = vector(value, where, 4)
+        norm = float(sum(exact_fraction(c) ** 2 for c in q)) ** 0.5
+        if abs(norm - 1) > _UNIT_TOL:
+            raise SceneError(
+                where, f"is not a rotation: a unit quaternion is needed, norm is {norm:.17g}"
+            )
+        return kind, q
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        raise SceneError(where, "must be a 3x3 list of rows")
+    rows = tuple(vector(row, f"{where}[{i}]", 3) for i, row in enumerate(value))
+    M = np.array([[float(exact_fraction(v)) for v in row] for row in rows])
+    defect = float(np.max(np.abs(M.T @ M - np.eye(3))))
+    det = float(np.linalg.det(M))
+    if defect > _UNIT_TOL or det <= 0:
+        raise SceneError(
+            where,
+            f"is not a rotation: needs RᵀR = I and det R = +1 (max |RᵀR − I| = {defect:.3g}, "
+            f"det R = {det:.17g})",
+        )
+    return kind, rows
