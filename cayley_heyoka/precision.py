@@ -174,3 +174,11 @@ def exact_fraction(value: Number) -> Fraction:
     if isinstance(value, str):
         return Fraction(value.strip().replace("_", ""))
     return Fraction(value)
+
+
+def fraction_text(value: Fraction, precision: Precision) -> str:
+    """Decimal text of a rational, with enough digits to round correctly in ``precision``."""
+    import mpmath
+
+    with mpmath.workdps(precision.dps + 15):
+        return mpmath.nstr(mpmath.mpf(value.numerator) / value.denominator, precision.dps + 10)

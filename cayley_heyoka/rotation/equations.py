@@ -16,6 +16,7 @@ Every function returns heyoka expressions (or lists of them) built from the argu
 from __future__ import annotations
 
 from collections.abc import Sequence
+from fractions import Fraction
 
 import heyoka as hy
 
@@ -25,15 +26,27 @@ Expr = hy.expression
 
 
 def euler_rates(
-    inertia: Sequence[Expr], rates: Sequence[Expr], torque: Sequence[Expr] | None = None
+    coefficients: Sequence[Expr],
+    rates: Sequence[Expr],
+    torque: Sequence[Expr] | None = None,
+    inverse_inertia: Sequence[Expr] | None = None,
 ) -> list[Expr]:
-    """Right-hand sides of Euler's equations ``A ṗ + (C − B) q r = N₁`` and cyclically."""
-    A, B, C = inertia
+    """Right-hand sides of Euler's equations ``A ṗ + (C − B) q r = N₁`` and cyclically.
+
+    ``coefficients`` are ``((B − C)/A, (C − A)/B, (A − B)/C)`` and ``inverse_inertia``
+    ``(1/A, 1/B, 1/C)``: computed once from the moments (exactly, then rounded in the target
+    precision) rather than in every step, which is what a hand-written system would do.
+    """
     p, q, r = rates
-    rhs = [(B - C) * q * r, (C - A) * r * p, (A - B) * p * q]
+    rhs = [coefficients[0] * q * r, coefficients[1] * r * p, coefficients[2] * p * q]
     if torque is not None:
-        rhs = [rhs[i] + torque[i] for i in range(3)]
-    return [rhs[0] / A, rhs[1] / B, rhs[2] / C]
+        rhs = [rhs[i] + torque[i] * inverse_inertia[i] for i in range(3)]
+    return rhs
+
+
+def euler_coefficients(A: Fraction, B: Fraction, C: Fraction) -> tuple[Fraction, ...]:
+    """``((B − C)/A, (C − A)/B, (A − B)/C, 1/A, 1/B, 1/C)``, exactly."""
+    return ((B - C) / A, (C - A) / B, (A - B) / C, 1 / A, 1 / B, 1 / C)
 
 
 def rodrigues_kinematics(rho: Sequence[Expr], rates: Sequence[Expr]) -> list[Expr]:

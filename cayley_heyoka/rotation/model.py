@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import SceneError
 from ..expressions import parse_expression
 from ..model import EventSpec, Model, ParTable, TerminalSpec
+from ..precision import exact_fraction, fraction_text
 from ..scene import Scene
 from . import attitude as att
 from . import equations as eq
@@ -53,7 +54,13 @@ def build_model(scene: Scene) -> Model:
         attitude = _quaternion(body, pars, rates, q0, momentum, inertia)
 
     torque = attitude.torque if attitude else None
-    system = list(zip(rates, eq.euler_rates(inertia, rates, torque), strict=True))
+    exact = eq.euler_coefficients(*(exact_fraction(v) for v in body.inertia))
+    names = ["euler[0]", "euler[1]", "euler[2]", "1/A", "1/B", "1/C"]
+    coeffs = [
+        pars.add(n, fraction_text(c, prec))
+        for n, c in zip(names[: 3 + 3 * bool(torque)], exact, strict=False)
+    ]
+    system = list(zip(rates, eq.euler_rates(coeffs[:3], rates, torque, coeffs[3:]), strict=True))
     initial = rates0
     terminal = []
     if attitude:

@@ -1,0 +1,155 @@
+"""The rotation engine end to end: forces, the chart atlas, events, caching, failures, files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import PRECISIONS, free_body
+
+from cayley_heyoka import IntegrationError, Result, Scene, engine, run
+from cayley_heyoka.families import FAMILIES
+
+HEAVY_TOP = {"heavy_top": {"weight": "1", "center_of_mass": ["0.1", "-0.05", "0.3"]}}
+
+
+@pytest.mark.parametrize("formulation", ["rodrigues", "quaternion"])
+@pytest.mark.parametrize("prec_name", ["double", "quad"])
+def test_heavy_top_conserves_energy_and_vertical_momentum(formulation, prec_name):
+    prec = PRECISIONS[prec_name]
+    stop = "100" if prec_name == "double" else "10"
+    data = free_body(
+        body={"inertia": ["1", "1.6", "2.3"]},
+        initial={"rates": ["0.3", "1", "0.5"]},
+        forces=HEAVY_TOP,
+        attitude={"formulation": formulation},
+        integrator={"precision": prec.to_spec()},
+        output={"times": {"start": "0", "stop": stop, "count": 101}},
+    )
+    result = run(Scene.from_dict(data))
+    assert set(result.conserved) == {"energy", "momentum_vertical"}
+    bound = 30 * prec.epsilon * np.sqrt(result.counters["steps"])
+    for name in result.conserved:
+        assert float(np.max(np.abs(result.drift(name)))) < bound, name
+    # the torque is real: |L|² is not conserved
+    assert float(np.max(np.abs(result.drift("momentum_squared")))) > 1e-3
+
+
+def test_rodrigues_atlas_matches_quaternions_through_many_half_turns():
+    """≥ 100 passages of the rotation angle through π, counted by an event on w = cos(θ/2)."""
+    data = free_body(
+        body={"inertia": ["1", "1.6", "2.3"]},
+        initial={"rates": ["0.4", "3", "0.6"], "rodrigues": ["0.1", "0.2", "-0.3"]},
+        output={"times": {"start": "0", "stop": "250", "count": 51}, "events": ["half_turn"]},
+        events={"half_turn": {"expression": "qw"}},
+    )
+    atlas = run(Scene.from_dict(data))
+    data["attitude"] = {"formulation": "quaternion"}
+    quat = run(Scene.from_dict(data))
+    passages = len(atlas.events["half_turn"])
+    assert passages >= 100
+    assert atlas.counters["rebasings"] >= passages
+    assert len(quat.events["half_turn"]) == passages
+    for name in ("p", "q", "r", "qw", "qx", "qy", "qz"):
+        assert np.max(np.abs(atlas[name] - quat[name])) < 1e-11, name
+    # the reported quaternion is continuous: no sign flips at re-basings
+    dense_data = {**data, "attitude": {}, "events": {}}
+    dense_data["output"] = {"times": {"start": "0", "stop": "20", "count": 4001}}
+    dense = run(Scene.from_dict(dense_data))
+    steps = np.abs(np.diff(np.array([dense[k] for k in ("qw", "qx", "qy", "qz")]), axis=1))
+    assert np.max(steps) < 0.02
+
+
+@pytest.mark.parametrize("formulation", ["rodrigues", "quaternion"])
+def test_invariable_plane_crossings_are_the_zeros_of_the_rates(formulation):
+    data = free_body(
+        initial={"rates": ["0.6", "0.5", "0.9"]},
+        attitude={"formulation": formulation},
+        output={
+            "times": {"start": "0", "stop": "60", "count": 2},
+            "events": ["invariable_plane", "p_zero", "q_zero", "r_zero"],
+        },
+        events={f"{c}_zero": {"expression": c} for c in "pqr"},
+    )
+    result = run(Scene.from_dict(data))
+    plane = result.events["invariable_plane"]
+    assert len(plane) > 20
+    for axis, rate in (("x1", "p_zero"), ("y1", "q_zero"), ("z1", "r_zero")):
+        mine = plane.time[plane.label == axis]
+        theirs = result.events[rate].time
+        assert len(mine) == len(theirs), axis
+        if len(mine):
+            assert np.max(np.abs(mine - theirs)) < 1e-12, axis
+            assert np.array_equal(
+                plane.direction[plane.label == axis], result.events[rate].direction
+            )
+    # near the major axis the dn-component r never vanishes: z1 never crosses the plane
+    assert len(result.events["r_zero"]) == 0
+
+
+def test_only_the_needed_terms_are_compiled():
+    build = FAMILIES["rotation"].build
+    data = free_body()
+    del data["initial"]["rodrigues"]
+    rates_only = build(Scene.from_dict(data))
+    assert rates_only.state_names == ["p", "q", "r"]
+    free = build(Scene.from_dict(free_body()))
+    assert free.state_names == ["p", "q", "r", "lambda", "mu", "nu"]
+    assert "lambda" not in str(free.system[0][1])
+    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP)))
+    assert "lambda" in str(top.system[0][1])
+
+
+def test_compiled_integrators_are_reused():
+    engine.clear_cache()
+    first = run(Scene.from_dict(free_body()))
+    again = run(Scene.from_dict(free_body()))
+    other_numbers = run(
+        Scene.from_dict(free_body(body={"inertia": [2, 3, 4]}, initial={"rates": [1, 1, 1]}))
+    )
+    assert not first.metadata["compiled_from_cache"]
+    assert again.metadata["compiled_from_cache"] and other_numbers.metadata["compiled_from_cache"]
+    assert engine.cache_size() == 1
+    assert np.array_equal(first["p"], again["p"])
+    assert not np.array_equal(first["p"], other_numbers["p"])
+
+
+def test_a_run_that_blows_up_keeps_what_it_computed():
+    data = free_body(
+        forces={"potential": {"V": "exp(100 * (t - 6)) * lambda"}},
+        output={"times": {"start": "0", "stop": "20", "count": 21}},
+    )
+    with pytest.raises(IntegrationError, match="non-finite") as info:
+        run(Scene.from_dict(data))
+    partial = info.value.result
+    assert not partial.success
+    assert 6 <= len(partial.t) < 21
+    assert np.all(np.isfinite(partial["p"]))
+
+
+def test_user_potential_in_rodrigues_matches_heavy_top():
+    cosines = "-(0.1 * R31 - 0.05 * R32 + 0.3 * R33)"
+    user = run(Scene.from_dict(free_body(forces={"potential": {"V": cosines}})))
+    top = run(Scene.from_dict(free_body(forces=HEAVY_TOP)))
+    assert np.max(np.abs(user["p"] - top["p"])) < 1e-13
+
+
+@pytest.mark.parametrize("prec_name", ["double", "quad", "real256"])
+def test_result_files_round_trip_exactly(tmp_path, prec_name):
+    prec = PRECISIONS[prec_name]
+    data = free_body(
+        integrator={"precision": prec.to_spec()},
+        output={"times": {"start": "0", "stop": "3", "count": 4}, "events": ["invariable_plane"]},
+    )
+    result = run(Scene.from_dict(data))
+    path = tmp_path / "r.h5"
+    result.save(path)
+    back = Result.load(path)
+    assert back.precision == prec
+    assert back.scene == result.scene and back.counters == result.counters
+    for name in result.variables:
+        assert all(a == b for a, b in zip(result[name], back[name], strict=True)), name
+    assert np.all(back["momentum_space"] == result["momentum_space"])
+    ev, ev2 = result.events["invariable_plane"], back.events["invariable_plane"]
+    assert len(ev) > 0 and all(a == b for a, b in zip(ev.time, ev2.time, strict=True))
+    assert list(ev.label) == list(ev2.label)
+    assert Scene.from_dict(back.scene).integrator.precision == prec

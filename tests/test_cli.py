@@ -1,0 +1,46 @@
+"""The command line: run a bundled scene, write and summarise a result file, fail clearly."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from cayley_heyoka import Result
+from cayley_heyoka.cli import main
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+@pytest.mark.parametrize("scene", sorted(p.name for p in EXAMPLES.glob("*.toml")))
+def test_bundled_scenes_run(tmp_path, capsys, scene):
+    out = tmp_path / "r.h5"
+    assert main(["run", str(EXAMPLES / scene), "--out", str(out), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "completed" in text and "steps" in text and "energy" in text
+    result = Result.load(out)
+    assert result.success and len(result.t) > 1
+    assert main(["info", str(out)]) == 0
+
+
+def test_bad_scene_is_reported_with_its_field(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        "[body]\ninertia = [1, 1, 3]\n[initial]\nrates = [1, 0, 0]\n[output]\ntimes = [0, 1]\n"
+    )
+    assert main(["run", str(bad), "--no-progress"]) == 2
+    assert "body.inertia: violates the triangle inequality" in capsys.readouterr().err
+
+
+def test_failed_run_saves_partial_results(tmp_path, capsys):
+    scene = tmp_path / "boom.toml"
+    scene.write_text(
+        "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [0.1, 0.2, 1]\n"
+        '[forces.potential]\nV = "exp(100 * (t - 6)) * lambda"\n'
+        "[output]\ntimes = { start = 0, stop = 20, count = 21 }\n"
+    )
+    out = tmp_path / "boom.h5"
+    assert main(["run", str(scene), "--out", str(out), "--no-progress"]) == 1
+    assert "non-finite" in capsys.readouterr().err
+    partial = Result.load(out)
+    assert not partial.success and 6 <= len(partial.t) < 21
