@@ -258,12 +258,6 @@ class Scene:
         """The plain dictionary this scene was built from."""
         return _plain(self.source)
 
-    def replace(self, **tables: Any) -> Scene:
-        """A copy with top-level tables replaced (validated again), e.g. ``integrator={...}``."""
-        data = self.to_dict()
-        data.update(tables)
-        return Scene.from_dict(data)
-
 
 def load_scene(path: str | Path) -> Scene:
     """Read and validate a scene file."""
