@@ -204,6 +204,42 @@ def step_cost_table(repeats: int = 7, t_end: float = 20000.0) -> list[str]:
     return rows
 
 
+def formulation_steps_table() -> list[str]:
+    """Steps and wall time of the two attitude formulations over the same span (double)."""
+    rows = [
+        "| scene | formulation | max chart angle | steps | rebasings | wall |",
+        "|---|---|---|---|---|---|",
+    ]
+    forces = {
+        "free body": {},
+        "heavy top": {"heavy_top": {"weight": 1.0, "center_of_mass": [0.1, -0.05, 0.3]}},
+    }
+    variants = [("rodrigues", a) for a in (90, 120, 160)] + [("quaternion", None)]
+    for label, force in forces.items():
+        for formulation, angle in variants:
+            attitude = {"formulation": formulation}
+            if angle:
+                attitude["max_chart_angle"] = angle
+            data = {
+                "body": {"inertia": [1.0, 1.6, 2.3]},
+                "initial": {"rates": [0.3, 1.0, 0.5], "rodrigues": [0.1, 0.2, -0.3]},
+                "attitude": attitude,
+                "forces": force,
+                "output": {"times": [0.0, 500.0]},
+            }
+            scene = ch.Scene.from_dict(data)
+            ch.run(scene)
+            t0 = time.perf_counter()
+            result = ch.run(scene)
+            wall = time.perf_counter() - t0
+            rows.append(
+                f"| {label} | {formulation} | {angle or '-'} | {result.counters['steps']} | "
+                f"{result.counters.get('rebasings', '-')} | {wall * 1e3:.1f} ms |"
+            )
+            print(rows[-1], flush=True)
+    return rows
+
+
 def main() -> None:
     sections = [
         "# Rotation engine figures",
@@ -221,6 +257,10 @@ def main() -> None:
         "## Compile cost",
         "",
         *compile_table(),
+        "",
+        "## Attitude formulations over t = 500 (double, tolerance ε)",
+        "",
+        *formulation_steps_table(),
         "",
         "## Step cost against a hand-written heyoka system (double, tolerance ε)",
         "",
