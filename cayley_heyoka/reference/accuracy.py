@@ -1,0 +1,137 @@
+"""Certified evaluation: every reference value carries an error estimate.
+
+A closed form evaluated in mpmath is only as good as its working precision, and the cancellations
+near the separatrix (1 − m → 0) or near a symmetric body (B − A → 0) eat digits silently. So each
+quantity is computed twice, at two working precisions ``dps + guard`` and ``dps + 2·guard``; the
+difference bounds the error of the first and, with room to spare, that of the second, which is
+returned. A call whose estimate exceeds the requested ``10**-dps`` raises
+:class:`PrecisionNotReached` instead of returning a silently wrong number.
+
+Errors are *scaled*: absolute for |value| ≤ 1, relative above, the convention of the reference
+value notes in ``shared/notes``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import mpmath
+
+__all__ = ["Certified", "PrecisionNotReached", "certify", "scaled_difference", "to_mpf"]
+
+
+class PrecisionNotReached(ArithmeticError):
+    """A reference quantity could not be computed to the requested number of digits.
+
+    Attributes
+    ----------
+    quantity : str
+        Name of the offending quantity.
+    dps : int
+        Requested decimal digits.
+    estimate : float
+        The error estimate that was reached (scaled: absolute if |value| ≤ 1, else relative).
+    """
+
+    def __init__(self, quantity: str, dps: int, estimate: float, hint: str = "") -> None:
+        self.quantity, self.dps, self.estimate = quantity, dps, estimate
+        message = (
+            f"{quantity}: cannot certify {dps} digits (error estimate {estimate:.2e} > 1e-{dps})"
+        )
+        super().__init__(message + (f"; {hint}" if hint else ""))
+
+
+@dataclass(frozen=True)
+class Certified:
+    """Values with their error estimates, both keyed by quantity name."""
+
+    values: dict[str, mpmath.mpf]
+    errors: dict[str, mpmath.mpf]
+    dps: int
+
+    @property
+    def worst_error(self) -> mpmath.mpf:
+        return max(self.errors.values(), default=mpmath.mpf(0))
+
+
+def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
+    """Convert an input number *exactly*: decimal text at the current precision, floats exactly.
+
+    Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float is
+    taken at its exact binary value, never through ``str``.
+    """
+    if isinstance(x, bool):
+        raise TypeError(f"{name}: expected a number, got a bool")
+    if isinstance(x, str):
+        try:
+            value = mpmath.mpf(x.strip())
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"{name}: {x!r} is not a number") from exc
+    else:
+        try:
+            value = mpmath.mpf(x)
+        except (ValueError, TypeError) as exc:
+            raise TypeError(f"{name}: {x!r} is not a real number") from exc
+    if not mpmath.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {x!r}")
+    return value
+
+
+def scaled_difference(a: mpmath.mpf, b: mpmath.mpf) -> mpmath.mpf:
+    """|a − b|, relative to |b| when |b| > 1 (the notes' convention)."""
+    if a == b:  # also for infinite values (a steady rotation's period)
+        return mpmath.mpf(0)
+    return abs(a - b) / max(mpmath.mpf(1), abs(b))
+
+
+def certify(
+    compute: Callable[[int], Mapping[str, mpmath.mpf]],
+    dps: int,
+    *,
+    guard: int = 12,
+    hint: str = "",
+) -> Certified:
+    """Evaluate ``compute(working_dps)`` at two precisions and certify ``dps`` digits.
+
+    Parameters
+    ----------
+    compute : callable
+        ``compute(working_dps)`` must set nothing global and return named mpmath numbers computed
+        with ``mpmath.workdps(working_dps)`` active (this function activates it).
+    dps : int
+        Requested decimal digits (≥ 5).
+    guard : int
+        Extra digits of the first evaluation; the second uses twice as many.
+    hint : str
+        Appended to the error message when the request cannot be met.
+
+    Returns
+    -------
+    Certified
+        Values from the more precise evaluation, rounded to ``dps + guard`` digits, and the
+        scaled difference of the two evaluations as each value's error estimate.
+
+    Raises
+    ------
+    PrecisionNotReached
+        When any estimate exceeds ``10**-dps``.
+    """
+    if not isinstance(dps, int) or dps < 5:
+        raise ValueError(f"dps must be an integer >= 5, got {dps!r}")
+    with mpmath.workdps(dps + guard):
+        low = dict(compute(dps + guard))
+    with mpmath.workdps(dps + 2 * guard):
+        high = dict(compute(dps + 2 * guard))
+    values: dict[str, mpmath.mpf] = {}
+    errors: dict[str, mpmath.mpf] = {}
+    with mpmath.workdps(dps + guard):
+        floor = mpmath.mpf(10) ** -(dps + guard)
+        for name, value in high.items():
+            values[name] = +value  # round to dps + guard digits
+            errors[name] = max(scaled_difference(low[name], value), floor)
+    tolerance = mpmath.mpf(10) ** -dps
+    for name, error in errors.items():
+        if error > tolerance:
+            raise PrecisionNotReached(name, dps, float(error), hint)
+    return Certified(values, errors, dps)
