@@ -134,6 +134,13 @@ class _Constants:
                 self._jacobi()
             elif self.kind == "symmetric":
                 self._symmetric()
+            if w1[0] == 0 and w1[1] == 0 and w1[2] < 0:
+                raise ValueError(
+                    "rates: a steady rotation about −z₁ (p = q = 0, r < 0) leaves the body a "
+                    "half-turn from the invariable frame (k + Cr = 0), where Cayley's ν₀ and its "
+                    "azimuth convention are undefined; turn the body labels (p, q, r) → "
+                    "(p, −q, −r) by a half-turn about x₁"
+                )
             # Invariable-frame attitude at t = 0 (Ψ = 0) and the constant space-side factor.
             self.q0_start = self.invariable_quaternion(mpmath.mpf(0), *w1)
             if attitude is None:
@@ -779,7 +786,7 @@ class FreeRigidBody:
                 self._span_digits(t1),
             )
             crossings.append(Crossing(cert.values["time"], direction, axis, cert.errors["time"]))
-        return [x for x in crossings if t0 <= x.time <= t1]
+        return sorted((x for x in crossings if t0 <= x.time <= t1), key=lambda x: x.time)
 
     def psi_by_quadrature(
         self, t: object, form: Literal["time", "phi", "r"] = "time"
