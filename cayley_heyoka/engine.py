@@ -127,6 +127,10 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     ta.pars[:] = prec.array(model.pars.values)
 
     callback = _ProgressCallback(progress) if progress else None
+    # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
+    limit = {}
+    if scene.integrator.max_step is not None:
+        limit["max_delta_t"] = prec.number(scene.integrator.max_step)
     states, pars_rows = [], []
     counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
     status, message = 0, "every output time was reached"
@@ -134,11 +138,11 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     while i < len(grid):
         if ta.time != grid[i]:
             # Resume after a terminal event: reach the next output time first.
-            res = ta.propagate_until(grid[i], callback=callback)
+            res = ta.propagate_until(grid[i], callback=callback, **limit)
             outcome = res[0]
             counters["steps"] += res[3]
         else:
-            res = ta.propagate_grid(grid[i:], callback=callback)
+            res = ta.propagate_grid(grid[i:], callback=callback, **limit)
             outcome, out = res[0], res[-1]
             counters["steps"] += res[3]
             states.append(out)

@@ -95,10 +95,15 @@ class IntegratorOptions:
     tolerance: Number | None = None
     compact_mode: bool | None = None
     high_accuracy: bool = False
+    max_step: Number | None = None
 
     @classmethod
     def parse(cls, table: Mapping[str, Any]) -> IntegratorOptions:
-        check_keys(table, ["precision", "tolerance", "compact_mode", "high_accuracy"], "integrator")
+        check_keys(
+            table,
+            ["precision", "tolerance", "compact_mode", "high_accuracy", "max_step"],
+            "integrator",
+        )
         precision = Precision.from_spec(table.get("precision", "double"))
         tol = table.get("tolerance", "auto")
         tolerance = None if tol == "auto" else number(tol, "integrator.tolerance", positive=True)
@@ -110,7 +115,9 @@ class IntegratorOptions:
         high = table.get("high_accuracy", False)
         if not isinstance(high, bool):
             raise SceneError("integrator.high_accuracy", f"must be true or false, got {high!r}")
-        return cls(precision, tolerance, None if compact == "auto" else compact, high)
+        step = table.get("max_step", "none")
+        max_step = None if step == "none" else number(step, "integrator.max_step", positive=True)
+        return cls(precision, tolerance, None if compact == "auto" else compact, high, max_step)
 
 
 @dataclass(frozen=True)

@@ -42,6 +42,11 @@ def test_tolerance_must_be_positive(tol):
     refuse(free_body(integrator={"tolerance": tol}), "integrator.tolerance", "must be > 0")
 
 
+@pytest.mark.parametrize("step", [0, -1, "inf"])
+def test_max_step_must_be_positive_and_finite(step):
+    refuse(free_body(integrator={"max_step": step}), "integrator.max_step", "must be")
+
+
 def test_unknown_keys_suggest_the_nearest():
     refuse(
         free_body(integrator={"tolerence": 1e-10}),

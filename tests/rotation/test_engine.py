@@ -130,6 +130,15 @@ def test_compiled_integrators_are_reused():
     assert not np.array_equal(first["p"], other_numbers["p"])
 
 
+def test_max_step_caps_steps_without_recompiling():
+    """A step cap is a runtime argument: same compiled integrator, more and shorter steps."""
+    free = run(Scene.from_dict(free_body()))
+    capped = run(Scene.from_dict(free_body(integrator={"max_step": "0.05"})))
+    assert capped.metadata["compiled_from_cache"]
+    assert capped.counters["steps"] >= 10 / 0.05 > free.counters["steps"]
+    assert np.allclose(capped["qw"], free["qw"], rtol=0, atol=1e-13)
+
+
 def test_a_run_that_blows_up_keeps_what_it_computed():
     data = free_body(
         forces={"potential": {"V": "exp(100 * (t - 6)) * lambda"}},
