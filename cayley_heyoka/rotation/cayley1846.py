@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import mpmath
 
 from ..reference.accuracy import PrecisionNotReached, certify, to_mpf
+from ..reference.inputs import check_dps, read_inertia, read_rates, read_triple
 from .attitude import matvec, rodrigues_to_matrix
 from .euler1758 import (
     GUARD,
@@ -41,11 +42,7 @@ from .euler1758 import (
     QuarterwiseIntegral,
     RegularisedRates,
     ThetaPoint,
-    check_dps,
     quarter_sin_cos,
-    read_inertia,
-    read_rates,
-    read_triple,
     theta_at_time,
 )
 

@@ -34,6 +34,7 @@ from typing import Literal
 import mpmath
 
 from ..reference.accuracy import Certified, PrecisionNotReached, certify, to_mpf
+from ..reference.inputs import check_dps, read_inertia, read_rates, read_triple
 from .attitude import (
     quaternion_multiply,
     quaternion_to_matrix,
@@ -625,27 +626,14 @@ class FreeRigidBody:
         dps: int = 30,
         require_physical: bool = True,
     ) -> None:
-        if not isinstance(dps, int) or isinstance(dps, bool) or dps < 5:
-            raise ValueError(f"dps must be an integer >= 5, got {dps!r}")
-        self.dps = dps
+        self.dps = dps = check_dps(dps)
         with mpmath.workdps(dps + 20):
-            moments = _triple(inertia, "inertia")
-            if any(x <= 0 for x in moments):
-                raise ValueError(f"inertia: moments must be > 0, got {list(map(str, moments))}")
-            A, B, C = moments
-            if require_physical and (A + B < C or B + C < A or C + A < B):
-                raise ValueError(
-                    "inertia: moments must satisfy the triangle inequality "
-                    f"(A + B >= C and cyclically), got {A}, {B}, {C}; Euler's equations stay "
-                    "well posed without it: pass require_physical=False for such test bodies"
-                )
-            w = _triple(rates, "rates")
-            if all(x == 0 for x in w):
-                raise ValueError("rates: at least one body rate must be non-zero")
+            read_inertia(inertia, require_physical)
+            read_rates(rates)
             if attitude is not None and rodrigues is not None:
                 raise ValueError("give at most one of attitude (quaternion) and rodrigues")
             if rodrigues is not None:
-                rho = _triple(rodrigues, "rodrigues")
+                rho = read_triple(rodrigues, "rodrigues")
                 attitude = [mpmath.nstr(x, dps + 20) for x in rodrigues_to_quaternion(rho)]
             if attitude is not None:
                 if len(attitude) != 4:
@@ -828,12 +816,6 @@ def free_rigid_body(
     parameters and for repeated evaluations (which reuse the constants).
     """
     return FreeRigidBody(inertia, rates, attitude=attitude, dps=dps).at(t)
-
-
-def _triple(values: Sequence[object], name: str) -> list[mpmath.mpf]:
-    if isinstance(values, str) or len(values) != 3:
-        raise ValueError(f"{name}: expected three numbers, got {values!r}")
-    return [to_mpf(x, name) for x in values]
 
 
 def _quarters(a, b) -> list[mpmath.mpf]:

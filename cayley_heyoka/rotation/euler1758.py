@@ -36,6 +36,7 @@ from typing import NamedTuple
 import mpmath
 
 from ..reference.accuracy import PrecisionNotReached, certify, to_mpf
+from ..reference.inputs import check_dps, read_inertia, read_rates, read_triple
 
 __all__ = [
     "Euler1758",
@@ -43,11 +44,7 @@ __all__ = [
     "QuarterwiseIntegral",
     "RegularisedRates",
     "ThetaPoint",
-    "check_dps",
     "quarter_sin_cos",
-    "read_inertia",
-    "read_rates",
-    "read_triple",
     "theta_at_time",
 ]
 
@@ -58,42 +55,6 @@ GUESS_DPS = 20
 # compute beyond this degree (192 nodes), where tanh-sinh takes over (it also copes with the
 # sharp peaks next to the separatrix).
 GAUSS_MAXDEGREE = 7
-
-
-# -- input checks shared with cayley1846 -----------------------------------------------------------
-def check_dps(dps: object) -> int:
-    """The requested number of digits: an integer ≥ 5."""
-    if isinstance(dps, bool) or not isinstance(dps, int) or dps < 5:
-        raise ValueError(f"dps must be an integer >= 5, got {dps!r}")
-    return dps
-
-
-def read_triple(values: object, name: str) -> list[mpmath.mpf]:
-    """Three finite numbers, read exactly (:func:`to_mpf`); errors name ``name``."""
-    if isinstance(values, str) or not isinstance(values, Sequence) or len(values) != 3:
-        raise ValueError(f"{name}: expected a sequence of three numbers, got {values!r}")
-    return [to_mpf(x, f"{name}[{i}]") for i, x in enumerate(values)]
-
-
-def read_inertia(values: object) -> list[mpmath.mpf]:
-    """Principal moments: three finite numbers > 0 obeying the triangle inequality."""
-    A, B, C = read_triple(values, "inertia")
-    if min(A, B, C) <= 0:
-        raise ValueError(f"inertia: the principal moments must be > 0, got {values!r}")
-    if A + B < C or B + C < A or C + A < B:
-        raise ValueError(
-            f"inertia: the moments {values!r} violate the triangle inequality "
-            "(A + B >= C, B + C >= A, C + A >= B)"
-        )
-    return [A, B, C]
-
-
-def read_rates(values: object) -> list[mpmath.mpf]:
-    """Body rates: three finite numbers, not all zero."""
-    w = read_triple(values, "rates")
-    if all(x == 0 for x in w):
-        raise ValueError("rates: the angular velocity is zero; there is no motion")
-    return w
 
 
 # -- the regularised parametrisation (§2.1) --------------------------------------------------------

@@ -336,13 +336,22 @@ def test_many_periods_add_whole_increments():
 @pytest.mark.parametrize(
     "kwargs, fragment",
     [
-        (dict(inertia=("1", "-2", "3"), rates=("1", "1", "1")), "inertia: moments must be > 0"),
+        (
+            dict(inertia=("1", "-2", "3"), rates=("1", "1", "1")),
+            "inertia: the principal moments must be > 0",
+        ),
         (dict(inertia=("1", "2", "4"), rates=("1", "1", "1")), "triangle inequality"),
-        (dict(inertia=("1", "2", "nan"), rates=("1", "1", "1")), "inertia must be finite"),
-        (dict(inertia=("1", "2", "3"), rates=("0", "0", "0")), "rates: at least one"),
-        (dict(inertia=("1", "2"), rates=("1", "1", "1")), "inertia: expected three"),
-        (dict(inertia=("1", "2", "3"), rates=("1", "x", "1")), "rates: 'x' is not a number"),
-        (dict(inertia=("1", "2", "3"), rates=("1", "1", "1"), dps=3), "dps must be"),
+        (dict(inertia=("1", "2", "nan"), rates=("1", "1", "1")), r"inertia\[2\] must be finite"),
+        (
+            dict(inertia=("1", "2", "3"), rates=("0", "0", "0")),
+            "rates: the angular velocity is zero",
+        ),
+        (dict(inertia=("1", "2"), rates=("1", "1", "1")), "inertia: expected a sequence of three"),
+        (dict(inertia=("1", "2", "3"), rates=("1", "x", "1")), r"rates\[1\]: 'x' is not a number"),
+        (
+            dict(inertia=("1", "2", "3"), rates=("1", "1", "1"), dps=3),
+            "dps must be an integer >= 5",
+        ),
         (
             dict(inertia=("1", "2", "3"), rates=("1", "1", "1"), attitude=("1", "0", "0", "0.1")),
             "attitude: quaternion must have unit norm",
