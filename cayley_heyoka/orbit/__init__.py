@@ -1,0 +1,1 @@
+"""Disturbed elliptic motion in the osculating orbit plane (Cayley 1860), and its Cartesian twin."""

@@ -1,0 +1,116 @@
+"""The frames of Cayley (1860) and the tables that place one in another.
+
+Symbols, as in the memoir (``../shared/notes/cayley1860.md`` §2–§4):
+
+* frame 0 — the fixed (inertial) reference plane;
+* frame 1 — the reference plane, possibly moving: node longitude θ′, node departure σ′ and
+  inclination φ′ relative to frame 0 (prescribed functions of time);
+* frame 2 — the osculating orbit plane, with its origin x₂ a *departure point* (it moves only
+  perpendicularly to the plane): node longitude Θ, node departure Σ and inclination Φ relative
+  to frame 1;
+* the body lies in frame 2 at radius r and departure ρ (angle from x₂); ``u = ρ − Σ`` is its
+  argument of latitude (arc from the ascending node on plane 1).
+
+A table ``M_ab`` holds the unit vectors of frame b as columns in frame a
+(``x⁽ᵃ⁾ = M_ab x⁽ᵇ⁾``); for node longitude θ, departure σ and inclination φ,
+``M(θ, σ, φ) = R₃(θ) R₁(φ) R₃(−σ)``.
+
+The functions use arithmetic and ``sin``/``cos``/``sqrt``/``atan2`` only, taken from
+:func:`functions_for`, so one formula serves heyoka expressions (the equations), mpmath numbers
+(exact initial states) and numpy arrays (vectorised conversions).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+Matrix = list[list[Any]]
+Vector = list[Any]
+
+
+def functions_for(*values: Any) -> SimpleNamespace:
+    """``sin, cos, sqrt, atan2`` for the kind of the values: heyoka, mpmath or numpy."""
+    import heyoka as hy
+
+    for v in values:
+        if isinstance(v, hy.expression):
+            return SimpleNamespace(sin=hy.sin, cos=hy.cos, sqrt=hy.sqrt, atan2=hy.atan2)
+    for v in values:
+        if type(v).__module__.startswith("mpmath"):
+            import mpmath
+
+            return SimpleNamespace(
+                sin=mpmath.sin, cos=mpmath.cos, sqrt=mpmath.sqrt, atan2=mpmath.atan2
+            )
+    return SimpleNamespace(sin=np.sin, cos=np.cos, sqrt=np.sqrt, atan2=np.arctan2)
+
+
+def rotation_x(a: Any) -> Matrix:
+    """``R₁(a)``: active right-handed rotation by ``a`` about the first axis."""
+    f = functions_for(a)
+    c, s = f.cos(a), f.sin(a)
+    return [[1 + 0 * c, 0 * c, 0 * c], [0 * c, c, -s], [0 * c, s, c]]
+
+
+def rotation_z(a: Any) -> Matrix:
+    """``R₃(a)``: active right-handed rotation by ``a`` about the third axis."""
+    f = functions_for(a)
+    c, s = f.cos(a), f.sin(a)
+    return [[c, -s, 0 * c], [s, c, 0 * c], [0 * c, 0 * c, 1 + 0 * c]]
+
+
+def plane_matrix(theta: Any, sigma: Any, phi: Any) -> Matrix:
+    """``M(θ, σ, φ) = R₃(θ) R₁(φ) R₃(−σ)``, written out (notes §3.2).
+
+    Column 3 is the plane's normal, ``(sin θ sin φ, −cos θ sin φ, cos φ)``.
+    """
+    f = functions_for(theta, sigma, phi)
+    ct, st = f.cos(theta), f.sin(theta)
+    cs, ss = f.cos(sigma), f.sin(sigma)
+    cp, sp = f.cos(phi), f.sin(phi)
+    return [
+        [cs * ct + ss * st * cp, ss * ct - cs * st * cp, st * sp],
+        [cs * st - ss * ct * cp, ss * st + cs * ct * cp, -ct * sp],
+        [-ss * sp, cs * sp, cp],
+    ]
+
+
+def orbit_axes(Theta: Any, Phi: Any, u: Any) -> tuple[Vector, Vector, Vector]:
+    """``x̂₃`` (towards the body), ``ŷ₃`` (90° ahead in the orbit) and ``n̂`` in frame 1 (§5)."""
+    f = functions_for(Theta, Phi, u)
+    cT, sT = f.cos(Theta), f.sin(Theta)
+    cP, sP = f.cos(Phi), f.sin(Phi)
+    cu, su = f.cos(u), f.sin(u)
+    x3 = [cT * cu - sT * cP * su, sT * cu + cT * cP * su, sP * su]
+    y3 = [-cT * su - sT * cP * cu, -sT * su + cT * cP * cu, sP * cu]
+    n = [sT * sP, -cT * sP, cP]
+    return x3, y3, n
+
+
+def matmul(a: Matrix, b: Matrix) -> Matrix:
+    """Product of two 3×3 tables."""
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def transpose(a: Matrix) -> Matrix:
+    """Transpose of a 3×3 table (its inverse)."""
+    return [[a[j][i] for j in range(3)] for i in range(3)]
+
+
+def matvec(a: Matrix, v: Sequence[Any]) -> Vector:
+    """``a v`` for a 3×3 table and a 3-vector."""
+    return [sum(a[i][k] * v[k] for k in range(3)) for i in range(3)]
+
+
+def dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
+    """Scalar product of two 3-vectors."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def cross(a: Sequence[Any], b: Sequence[Any]) -> Vector:
+    """Vector product of two 3-vectors."""
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
