@@ -154,9 +154,12 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
             continue
         if -len(model.terminal) <= code <= -1:
             spec = model.terminal[-code - 1]
-            spec.handle(ta)
-            ta.reset_cooldowns()
+            stop = spec.handle(ta)
             counters[spec.counter] += 1
+            if stop is not None:
+                status, message = -1, stop
+                break
+            ta.reset_cooldowns()
             continue
         status = -1
         if outcome == hy.taylor_outcome.err_nf_state:
@@ -283,7 +286,7 @@ def _event_logs(model: Model, ta: Any, prec: Precision) -> dict[str, EventLog]:
         rec = ev.callback
         gathered.setdefault(spec.name, [])
         gathered[spec.name] += [
-            (t, d, spec.label) for t, d in zip(rec.times, rec.directions, strict=True)
+            (t, d, spec.label_for(d)) for t, d in zip(rec.times, rec.directions, strict=True)
         ]
     logs = {}
     for name, items in gathered.items():

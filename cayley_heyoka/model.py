@@ -51,27 +51,34 @@ class EventSpec:
     """A non-terminal event: record each zero of ``expression``.
 
     ``direction`` is 0 (any), +1 (upwards only) or -1 (downwards only); ``label`` says what
-    fired (e.g. the body axis), several specs may share one ``name``.
+    fired (e.g. the body axis), several specs may share one ``name``; ``labels`` replaces it
+    by direction of crossing (e.g. ``{1: "ascending", -1: "descending"}``).
     """
 
     name: str
     label: str
     expression: Expr
     direction: int = 0
+    labels: dict[int, str] | None = None
+
+    def label_for(self, direction: int) -> str:
+        """The label of an occurrence crossing zero in ``direction``."""
+        return self.labels.get(direction, self.label) if self.labels else self.label
 
 
 @dataclass
 class TerminalSpec:
-    """A terminal event that lets the family act on the integrator, then the run goes on.
+    """A terminal event that lets the family act on the integrator.
 
     ``handle(integrator)`` is called with the integrator stopped at the event; it may change
-    the state and the parameters (e.g. re-base an attitude chart). ``counter`` names the tally
-    of its occurrences in :attr:`Result.counters`.
+    the state and the parameters (e.g. re-base an attitude chart), and the run goes on; or it
+    returns a message, and the run ends there with that message (results kept). ``counter``
+    names the tally of its occurrences in :attr:`Result.counters`.
     """
 
     expression: Expr
     direction: int
-    handle: Callable[[Any], None]
+    handle: Callable[[Any], str | None]
     counter: str
 
 
