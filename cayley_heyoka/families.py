@@ -11,13 +11,15 @@ from .errors import SceneError
 
 @dataclass(frozen=True)
 class Family:
-    """A model family: its scene tables, the table that identifies it, parse and build."""
+    """A model family: its scene tables, the table that identifies it, parse, build and the
+    checks that need the whole scene (e.g. the start time)."""
 
     name: str
     key_table: str
     tables: tuple[str, ...]
     parse: Callable[[Mapping[str, Any]], Any]
     build: Callable[[Any], Any]
+    check: Callable[[Any], None] | None = None
 
 
 def _rotation() -> Family:
@@ -29,7 +31,15 @@ def _rotation() -> Family:
     )
 
 
-FAMILIES: dict[str, Family] = {f.name: f for f in (_rotation(),)}
+def _orbit() -> Family:
+    from .orbit.model import build_model, check
+    from .orbit.scene import Orbit
+
+    tables = ("orbit", "perturbations", "reference_plane")
+    return Family("orbit", "orbit", tables, Orbit.parse, build_model, check)
+
+
+FAMILIES: dict[str, Family] = {f.name: f for f in (_rotation(), _orbit())}
 
 
 def family_of(data: Mapping[str, Any]) -> str:

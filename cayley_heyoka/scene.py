@@ -250,7 +250,10 @@ class Scene:
             raise SceneError("events", "must be a table of [events.NAME] tables")
         events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
         model = spec.parse({k: data[k] for k in spec.tables if k in data})
-        return cls(family, model, integrator, output, events, title, _plain(data))
+        scene = cls(family, model, integrator, output, events, title, _plain(data))
+        if spec.check is not None:
+            spec.check(scene)
+        return scene
 
     @classmethod
     def from_toml(cls, text: str) -> Scene:

@@ -1,0 +1,273 @@
+"""Disturbing functions Ω of the fixed frame's Cartesian coordinates, and the scene tables.
+
+Ω is Cayley's disturbing function (notes §6.1): the force function is ``V = μ/r + Ω`` and the
+perturbing acceleration is ``+∇Ω`` (the sign of most modern texts, minus Laplace's R). Each
+term below is written as a heyoka expression of the position ``x`` in frame 0 and of time; its
+gradient is taken by heyoka's symbolic differentiation (:func:`gradient`), and Cayley's partial
+derivatives follow from it by the chain rule through the frame tables (:mod:`.equations`).
+
+Only the terms a scene names are built, and their numbers are runtime parameters, so two
+scenes differing only in numbers share one compiled integrator.
+
+``[perturbations.zonal]``
+    ``J2``, ``J3``, … (any subset), ``radius`` R, ``axis`` k (direction of the symmetry axis,
+    normalised here; default +z). ``Ω = −μ Σₙ Jₙ Rⁿ Pₙ(k̂·x/r) / rⁿ⁺¹``.
+``[perturbations.third_body]``
+    ``gm``, semi-major axis ``a``, mean motion ``n``, ``eccentricity`` (default 0),
+    ``inclination``, ``node``, ``argument_of_pericentre`` (defaults 0) and ``mean_anomaly0``
+    (mean anomaly at t = 0): a prescribed Keplerian orbit about the central body. Direct plus
+    indirect part ``Ω = Gm₃ (1/|x − x₃| − x·x₃/|x₃|³)``, exact; with ``degree = N`` its Legendre
+    expansion ``Gm₃/r₃ Σ_{l=2..N} (r/r₃)ˡ Pₗ(cos ψ)``, valid only for a body inside the
+    perturber's orbit.
+``[perturbations.potential]``
+    ``Omega``: text over ``x``, ``y``, ``z``, ``r`` and ``t`` (see :mod:`..expressions`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import heyoka as hy
+
+from ..errors import SceneError
+from ..expressions import names_used, parse_expression
+from ..model import ParTable
+from ..precision import Number, exact_fraction
+from ..scene import check_keys, number, vector
+from . import frames
+
+Expr = hy.expression
+_MAX_DEGREE = 40
+
+
+@dataclass
+class Context:
+    """What a disturbing term may use: μ, the parameter table and the time expression."""
+
+    mu: Expr
+    pars: ParTable
+
+
+def legendre_homogeneous(n: int, s: Expr, r2: Expr) -> Expr:
+    """``rⁿ Pₙ(s/r)`` as a polynomial in s and r² (Bonnet's recurrence; no division by r)."""
+    q_prev, q = hy.expression(1.0), s
+    if n == 0:
+        return q_prev
+    for k in range(1, n):
+        q_prev, q = q, ((2 * k + 1) * s * q - k * r2 * q_prev) / (k + 1)
+    return q
+
+
+@dataclass(frozen=True)
+class Zonal:
+    """Zonal harmonics of an axisymmetric central body (oblateness J2 and higher)."""
+
+    coefficients: tuple[tuple[int, Number], ...]
+    radius: Number
+    axis: tuple[Number, Number, Number] = (0, 0, 1)
+    time_dependent = False
+
+    @classmethod
+    def parse(cls, table: Mapping[str, Any], where: str) -> Zonal:
+        keys = [k for k in table if re.fullmatch(r"J\d+", k)]
+        check_keys(table, ["radius", "axis", *keys, "J2", "J3", "J4"], where)
+        coeffs = []
+        for key in sorted(keys, key=lambda k: int(k[1:])):
+            degree = int(key[1:])
+            if not 2 <= degree <= _MAX_DEGREE:
+                raise SceneError(f"{where}.{key}", f"degree must be in 2..{_MAX_DEGREE}")
+            coeffs.append((degree, number(table[key], f"{where}.{key}")))
+        if not coeffs:
+            raise SceneError(where, "names no coefficient; give J2 (and J3, J4, … if wanted)")
+        if "radius" not in table:
+            raise SceneError(f"{where}.radius", "is required: the central body's radius R")
+        radius = number(table["radius"], f"{where}.radius", positive=True)
+        axis = vector(table.get("axis", [0, 0, 1]), f"{where}.axis", 3)
+        if all(exact_fraction(c) == 0 for c in axis):
+            raise SceneError(f"{where}.axis", "must be a nonzero vector (the symmetry axis)")
+        return cls(tuple(coeffs), radius, axis)
+
+    def unit_axis(self, pars: ParTable) -> list[Expr]:
+        """k̂ as expressions (normalised in the run's precision, never rounded beforehand)."""
+        k = [pars.add(f"zonal.axis[{i}]", self.axis[i]) for i in range(3)]
+        norm = hy.sqrt(k[0] * k[0] + k[1] * k[1] + k[2] * k[2])
+        return [c / norm for c in k]
+
+    def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
+        R = ctx.pars.add("zonal.radius", self.radius)
+        k = self.unit_axis(ctx.pars)
+        r2 = frames.dot(x, x)
+        s = frames.dot(k, x)
+        terms = []
+        for n, J in self.coefficients:
+            Jn = ctx.pars.add(f"zonal.J{n}", J)
+            # −μ Jₙ Rⁿ (rⁿ Pₙ(s/r)) / r²ⁿ⁺¹, with r²ⁿ⁺¹ as a power of r² (cheap in Taylor form).
+            terms.append(-ctx.mu * Jn * R**n * legendre_homogeneous(n, s, r2) * r2 ** (-(n + 0.5)))
+        return _sum(terms)
+
+
+@dataclass(frozen=True)
+class ThirdBody:
+    """A perturbing mass on a prescribed Keplerian orbit about the central body."""
+
+    gm: Number
+    a: Number
+    n: Number
+    eccentricity: Number = 0
+    inclination: Number = 0
+    node: Number = 0
+    argument_of_pericentre: Number = 0
+    mean_anomaly0: Number = 0
+    degree: int | None = None
+    time_dependent = True
+
+    @classmethod
+    def parse(cls, table: Mapping[str, Any], where: str) -> ThirdBody:
+        optional = [
+            "eccentricity",
+            "inclination",
+            "node",
+            "argument_of_pericentre",
+            "mean_anomaly0",
+            "degree",
+        ]
+        check_keys(table, ["gm", "a", "n", *optional], where)
+        for key in ("gm", "a", "n"):
+            if key not in table:
+                raise SceneError(f"{where}.{key}", "is required")
+        e = number(table.get("eccentricity", 0), f"{where}.eccentricity", nonneg=True)
+        if exact_fraction(e) >= 1:
+            raise SceneError(
+                f"{where}.eccentricity", f"must be in [0, 1) for an elliptic orbit, got {e}"
+            )
+        inc = number(table.get("inclination", 0), f"{where}.inclination")
+        if not 0 <= exact_fraction(inc) <= math.pi:
+            raise SceneError(f"{where}.inclination", f"must be in [0, π], got {inc}")
+        degree = table.get("degree")
+        if degree is not None and (
+            isinstance(degree, bool) or not isinstance(degree, int) or not 2 <= degree <= 40
+        ):
+            raise SceneError(f"{where}.degree", f"must be an integer in 2..40, got {degree!r}")
+        return cls(
+            number(table["gm"], f"{where}.gm", positive=True),
+            number(table["a"], f"{where}.a", positive=True),
+            number(table["n"], f"{where}.n"),
+            e,
+            inc,
+            number(table.get("node", 0), f"{where}.node"),
+            number(table.get("argument_of_pericentre", 0), f"{where}.argument_of_pericentre"),
+            number(table.get("mean_anomaly0", 0), f"{where}.mean_anomaly0"),
+            degree,
+        )
+
+    @property
+    def circular(self) -> bool:
+        return exact_fraction(self.eccentricity) == 0
+
+    @property
+    def pericentre(self) -> float:
+        return float(exact_fraction(self.a) * (1 - exact_fraction(self.eccentricity)))
+
+    def normal(self, pars: ParTable) -> list[Expr]:
+        """Unit normal of the perturber's orbit (its angular velocity's direction)."""
+        i = hy.par[pars.index("third_body.inclination")]
+        node = hy.par[pars.index("third_body.node")]
+        return [hy.sin(node) * hy.sin(i), -hy.cos(node) * hy.sin(i), hy.cos(i)]
+
+    def position(self, pars: ParTable) -> list[Expr]:
+        """``x₃(t) = R₃(node) R₁(i) R₃(ω) (in-plane position)``, Kepler's equation by heyoka."""
+        a = pars.add("third_body.a", self.a)
+        n = pars.add("third_body.n", self.n)
+        i = pars.add("third_body.inclination", self.inclination)
+        node = pars.add("third_body.node", self.node)
+        w = pars.add("third_body.argument_of_pericentre", self.argument_of_pericentre)
+        M0 = pars.add("third_body.mean_anomaly0", self.mean_anomaly0)
+        M = M0 + n * hy.time
+        if self.circular:
+            plane = [a * hy.cos(w + M), a * hy.sin(w + M), hy.expression(0.0)]
+            return frames.matvec(
+                frames.matmul(frames.rotation_z(node), frames.rotation_x(i)), plane
+            )
+        e = pars.add("third_body.eccentricity", self.eccentricity)
+        E = hy.kepE(e, M)
+        p = [a * (hy.cos(E) - e), a * hy.sqrt(1 - e * e) * hy.sin(E), hy.expression(0.0)]
+        rot = frames.matmul(
+            frames.matmul(frames.rotation_z(node), frames.rotation_x(i)), frames.rotation_z(w)
+        )
+        return frames.matvec(rot, p)
+
+    def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
+        gm = ctx.pars.add("third_body.gm", self.gm)
+        x3 = self.position(ctx.pars)
+        r3sq = frames.dot(x3, x3)
+        if self.degree is None:
+            d = [x[i] - x3[i] for i in range(3)]
+            direct = frames.dot(d, d) ** -0.5
+            indirect = frames.dot(x, x3) * r3sq**-1.5
+            return gm * (direct - indirect)
+        # Legendre series of the direct part; l = 0 is constant in x, l = 1 cancels the
+        # indirect part: Ω = Gm₃ Σ_{l≥2} (r² ... ) with rˡ Pₗ(cos ψ) = polynomial in x·x₃/r₃, r².
+        r2 = frames.dot(x, x)
+        c = frames.dot(x, x3)
+        terms = []
+        for k in range(2, self.degree + 1):
+            # rˡ Pₗ(cos ψ) / r₃ˡ⁺¹ with cos ψ = c/(r r₃): Bonnet in s = c/r₃ and r².
+            terms.append(legendre_homogeneous(k, c * r3sq**-0.5, r2) * r3sq ** (-(k + 1) / 2))
+        return gm * _sum(terms)
+
+
+@dataclass(frozen=True)
+class UserPotential:
+    """A disturbing function written as text over ``x, y, z, r, t``."""
+
+    text: str
+    time_dependent: bool = False
+
+    @classmethod
+    def parse(cls, table: Mapping[str, Any], where: str) -> UserPotential:
+        check_keys(table, ["Omega"], where)
+        if "Omega" not in table:
+            raise SceneError(f"{where}.Omega", "is required: Ω as text over x, y, z, r, t")
+        text = table["Omega"]
+        try:
+            used = names_used(text) if isinstance(text, str) else set()
+        except SyntaxError:
+            used = set()  # parse_expression reports it, naming the field
+        return cls(text, "t" in used)
+
+    def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
+        symbols = dict(zip("xyz", x, strict=True))
+        symbols["r"] = hy.sqrt(frames.dot(x, x))
+        symbols["mu"] = ctx.mu
+        return parse_expression(self.text, symbols, ctx.pars, "perturbations.potential.Omega")
+
+
+PERTURBATIONS = {"zonal": Zonal, "third_body": ThirdBody, "potential": UserPotential}
+
+
+def parse_perturbations(table: Mapping[str, Any]) -> tuple:
+    """The ``[perturbations.*]`` tables, in a fixed order so equal scenes compile equally."""
+    check_keys(table, list(PERTURBATIONS), "perturbations")
+    return tuple(
+        PERTURBATIONS[k].parse(table[k], f"perturbations.{k}") for k in PERTURBATIONS if k in table
+    )
+
+
+def disturbing_function(terms: Sequence[Any], x: Sequence[Expr], ctx: Context) -> Expr | None:
+    """Ω(x, t) of the given terms, or None when there is none (pure Kepler motion)."""
+    if not terms:
+        return None
+    return _sum([term.omega(x, ctx) for term in terms])
+
+
+def gradient(Omega: Expr, x: Sequence[Expr]) -> list[Expr]:
+    """∇Ω with respect to the Cartesian variables ``x`` (symbolic, by heyoka)."""
+    return [hy.diff(Omega, xi) for xi in x]
+
+
+def _sum(terms: Sequence[Expr]) -> Expr:
+    return terms[0] if len(terms) == 1 else hy.sum(list(terms))

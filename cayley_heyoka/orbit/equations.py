@@ -1,0 +1,188 @@
+"""Cayley's 1860 equations of disturbed motion in the osculating orbit plane.
+
+Symbols (notes ``cayley1860.md``; frames in :mod:`.frames`): r the radius, ṙ its rate, ρ the
+departure of the body (angle in the orbit plane from the departure point x₂), h = r²ρ̇ the
+angular momentum per unit mass, Θ, Σ, Φ the node longitude, node departure and inclination of
+the orbit plane on the reference plane, u = ρ − Σ the argument of latitude. The reference
+plane is placed in the fixed frame by θ′, σ′, φ′ (prescribed functions of time);
+A, B, C are the components of its angular velocity along the orbit's node line N̂,
+ẑ₁ × N̂ and ẑ₁ (§4).
+
+The system (§6.3, with the plane equations in the reduced form of §6.4, free of the
+cancelling cot Φ terms of the printed form)::
+
+    dr/dt = ṙ,          dṙ/dt = h²/r³ − μ/r² + ∂Ω/∂r,
+    dρ/dt = h/r²,       dh/dt = ∂Ω/∂ρ,
+    dΘ/dt = sin u Ω_β/(h sin Φ) − cot Φ B − C,
+    dΣ/dt = cos Φ sin u Ω_β/(h sin Φ) − cosec Φ B,
+    dΦ/dt = cos u Ω_β/h − A,
+
+with ``Ω_β = ∂Ω/∂β`` at zero latitude. The partials come from ``g = ∇Ω`` (symbolic, by
+heyoka) through the frame tables (§7): ``∂Ω/∂r = x̂₃·g``, ``∂Ω/∂ρ = r ŷ₃·g``,
+``Ω_β = r n̂·g``.
+
+The regular alternative (§10) carries the departure-point frame of the orbit as a unit
+quaternion q relative to the fixed frame: ``q̇ = ½ q ⊗ (0, w)`` with
+``w = (Ω_β/h)(cos ρ, sin ρ, 0)``; no cosec Φ, no reference plane in the equations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import heyoka as hy
+
+from . import frames
+
+Expr = hy.expression
+_ZERO = hy.expression(0.0)
+
+
+@dataclass
+class ReferencePlane:
+    """θ′, σ′, φ′ of the reference plane as expressions of time, and their rates.
+
+    A rate is None where it is identically zero, so that its terms are not compiled.
+    """
+
+    theta: Expr
+    sigma: Expr
+    phi: Expr
+    theta_rate: Expr | None
+    sigma_rate: Expr | None
+    phi_rate: Expr | None
+    departure_point: bool
+
+    def matrix(self) -> frames.Matrix:
+        """``M₀₁``: frame 1 in frame 0."""
+        return frames.plane_matrix(self.theta, self.sigma, self.phi)
+
+    def rates_on_node(self, Theta: Expr) -> tuple[Expr | None, Expr | None, Expr | None]:
+        """A, B, C (§4), each None where it vanishes identically (C: x₁ a departure point)."""
+        d = Theta - self.sigma
+        A, B, C = [], [], []
+        if self.theta_rate is not None:
+            sp = hy.sin(self.phi)
+            A.append(hy.sin(d) * sp * self.theta_rate)
+            B.append(hy.cos(d) * sp * self.theta_rate)
+        if self.phi_rate is not None:
+            A.append(hy.cos(d) * self.phi_rate)
+            B.append(-hy.sin(d) * self.phi_rate)
+        if not self.departure_point:
+            if self.theta_rate is not None:
+                C.append(hy.cos(self.phi) * self.theta_rate)
+            if self.sigma_rate is not None:
+                C.append(-self.sigma_rate)
+        return tuple(_total(terms) if terms else None for terms in (A, B, C))
+
+
+@dataclass
+class OrbitAxes:
+    """Unit vectors of the body frame in frame 0: x̂₃ (radial), ŷ₃ (transverse), n̂ (normal)."""
+
+    radial: list[Expr]
+    transverse: list[Expr]
+    normal: list[Expr]
+
+
+def cayley_axes(
+    Theta: Expr, Phi: Expr, u: Expr, plane: ReferencePlane | None
+) -> tuple[OrbitAxes, frames.Matrix | None]:
+    """The body frame from the angles (§5), mapped to frame 0 when the plane moves."""
+    x3, y3, n = frames.orbit_axes(Theta, Phi, u)
+    if plane is None:
+        return OrbitAxes(x3, y3, n), None
+    M01 = plane.matrix()
+    return OrbitAxes(*(frames.matvec(M01, v) for v in (x3, y3, n))), M01
+
+
+def quaternion_matrix(q: Sequence[Expr]) -> frames.Matrix:
+    """``ℛ(q)``: the table of the frame with unit quaternion q = (q₀, q₁, q₂, q₃)."""
+    w, x, y, z = q
+    return [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+
+
+def quaternion_axes(q: Sequence[Expr], rho: Expr) -> OrbitAxes:
+    """x̂₃, ŷ₃, n̂ in frame 0 from the orbit-frame quaternion and the departure ρ."""
+    R = quaternion_matrix(q)
+    c, s = hy.cos(rho), hy.sin(rho)
+    radial = [c * R[i][0] + s * R[i][1] for i in range(3)]
+    transverse = [c * R[i][1] - s * R[i][0] for i in range(3)]
+    return OrbitAxes(radial, transverse, [R[0][2], R[1][2], R[2][2]])
+
+
+def in_plane_rates(
+    r: Expr, rdot: Expr, h: Expr, mu: Expr, Omega_r: Expr | None, Omega_rho: Expr | None
+) -> list[Expr]:
+    """dr/dt, dṙ/dt, dρ/dt, dh/dt (§6.3; the radial sign is the corrected one, OCR item 3)."""
+    r2 = r * r
+    radial = h * h / (r2 * r) - mu / r2
+    if Omega_r is not None:
+        radial = radial + Omega_r
+    return [rdot, radial, h / r2, Omega_rho if Omega_rho is not None else _ZERO]
+
+
+def plane_rates(
+    u: Expr, h: Expr, Phi: Expr, Omega_beta: Expr | None, plane: ReferencePlane | None, Theta: Expr
+) -> list[Expr]:
+    """dΘ/dt, dΣ/dt, dΦ/dt in the reduced form (§6.4), with only the terms present."""
+    sP, cP = hy.sin(Phi), hy.cos(Phi)
+    dTheta, dSigma, dPhi = [], [], []
+    if Omega_beta is not None:
+        lift = hy.sin(u) * Omega_beta / (h * sP)
+        dTheta.append(lift)
+        dSigma.append(cP * lift)
+        dPhi.append(hy.cos(u) * Omega_beta / h)
+    if plane is not None:
+        A, B, C = plane.rates_on_node(Theta)
+        if B is not None:
+            dTheta.append(-cP * B / sP)
+            dSigma.append(-B / sP)
+        if A is not None:
+            dPhi.append(-A)
+        if C is not None:
+            dTheta.append(-C)
+    return [_total(terms) for terms in (dTheta, dSigma, dPhi)]
+
+
+def quaternion_rates(q: Sequence[Expr], rho: Expr, h: Expr, Omega_beta: Expr | None) -> list[Expr]:
+    """q̇ = ½ q ⊗ (0, w), w = (Ω_β/h)(cos ρ, sin ρ, 0): the orbit frame turns about x̂₃ only."""
+    if Omega_beta is None:
+        return [_ZERO] * 4
+    w0, x, y, z = q
+    k = Omega_beta / (2 * h)
+    wx, wy = k * hy.cos(rho), k * hy.sin(rho)
+    # Hamilton product with a pure quaternion (wx, wy, 0).
+    return [-(x * wx + y * wy), w0 * wx - z * wy, w0 * wy + z * wx, x * wy - y * wx]
+
+
+def cayley_partials(g: Sequence[Expr], r: Expr, axes: OrbitAxes) -> tuple[Expr, Expr, Expr]:
+    """∂Ω/∂r, ∂Ω/∂ρ and Ω_β from the Cartesian gradient (§7)."""
+    return (
+        frames.dot(axes.radial, g),
+        r * frames.dot(axes.transverse, g),
+        r * frames.dot(axes.normal, g),
+    )
+
+
+def cartesian_rates(
+    x: Sequence[Expr], v: Sequence[Expr], mu: Expr, g: Sequence[Expr] | None
+) -> list[Expr]:
+    """ẋ = v, v̇ = −μ x/r³ + ∇Ω."""
+    r2 = frames.dot(x, x)
+    k = mu * r2**-1.5
+    acc = [-k * xi for xi in x]
+    if g is not None:
+        acc = [a + gi for a, gi in zip(acc, g, strict=True)]
+    return [*v, *acc]
+
+
+def _total(terms: list[Expr]) -> Expr:
+    if not terms:
+        return _ZERO
+    return terms[0] if len(terms) == 1 else hy.sum(terms)

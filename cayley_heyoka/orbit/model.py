@@ -1,0 +1,428 @@
+"""Build the heyoka system of an orbit scene, in the formulation the scene asks for.
+
+* ``cayley``: Cayley's (r, ṙ, ρ, h, Θ, Σ, Φ) (:mod:`.equations`), with a terminal event that
+  stops the run when sin Φ falls to ``orbit.equatorial_limit`` (cosec Φ makes Θ and Σ lose
+  accuracy like ε/sin Φ there: see docs/orbits.md).
+* ``quaternion``: (r, ṙ, ρ, h) and the orbit frame as a unit quaternion: regular everywhere.
+* ``cartesian``: ẍ = −μx/r³ + ∇Ω, the independent check and a formulation of its own.
+
+Ω and its gradient are built once, on Cartesian placeholders, and composed with the
+formulation's position. Only the terms the scene names are compiled; the reference plane
+enters the Cayley equations only when it moves.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import heyoka as hy
+import mpmath
+
+from ..errors import SceneError
+from ..expressions import parse_expression
+from ..model import EventSpec, Model, ParTable, TerminalSpec
+from ..precision import exact_fraction
+from ..scene import Scene
+from . import elements as el
+from . import equations as eq
+from . import frames
+from .disturbing import Context, disturbing_function, gradient
+from .scene import Orbit, PlaneMotion
+
+CARTESIAN = ("x", "y", "z", "vx", "vy", "vz")
+CAYLEY = ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi")
+QUATERNION = ("qw", "qx", "qy", "qz")
+EVENTS = ("node", "apsis", "equatorial")
+_GUARD_DIGITS = 15
+
+
+def build_model(scene: Scene) -> Model:
+    """Turn a validated orbit scene into a :class:`~cayley_heyoka.model.Model`."""
+    orbit: Orbit = scene.model
+    prec = scene.integrator.precision
+    pars = ParTable()
+    mu = pars.add("mu", orbit.mu)
+    plane = _plane_expressions(orbit.plane, pars)
+    X = list(hy.make_vars(*CARTESIAN[:3]))
+    Omega = disturbing_function(orbit.perturbations, X, Context(mu, pars))
+    g = gradient(Omega, X) if Omega is not None else None
+    start = initial_state(orbit, _start_time(scene), prec.dps + _GUARD_DIGITS)
+
+    b = _Builder(orbit, pars, plane, mu, Omega, g, X)
+    if orbit.formulation == "cartesian":
+        b.cartesian(start)
+    elif orbit.formulation == "cayley":
+        b.cayley(start)
+    else:
+        b.quaternion(start)
+
+    monitors, conserved = _monitors(orbit, b, pars)
+    wanted = scene.output.monitors
+    if wanted is not None:
+        for name in wanted:
+            if name not in monitors:
+                raise SceneError(
+                    "output.monitors",
+                    f"{name!r} is not available here; available: {list(monitors)}",
+                )
+        monitors = {k: v for k, v in monitors.items() if k in wanted}
+        conserved = tuple(k for k in conserved if k in wanted)
+    events = _events(scene, orbit, b, pars)
+    initial = [prec.number(v) for v in b.initial]
+    return Model(
+        "orbit", b.system, initial, pars, b.outputs, monitors, conserved, events, b.terminal
+    )
+
+
+def check(scene: Scene) -> None:
+    """Geometric constraints that need the start time: raise :class:`SceneError` if violated."""
+    orbit: Orbit = scene.model
+    with mpmath.workdps(30):
+        t = _start_time(scene)
+        x, v = initial_cartesian(orbit, t)
+        H = frames.cross(x, v)
+        h = mpmath.sqrt(frames.dot(H, H))
+        where = "orbit.elements" if orbit.initial[0] == "elements" else "orbit.velocity"
+        if h == 0:
+            raise SceneError(
+                where, "gives rectilinear motion (x × v = 0): the orbit plane is undefined"
+            )
+        r = mpmath.sqrt(frames.dot(x, x))
+        mu = _mpf(orbit.mu)
+        energy = frames.dot(v, v) / 2 - mu / r
+        e = mpmath.sqrt(max(mpmath.mpf(0), 1 + 2 * energy * h * h / (mu * mu)))
+        q = h * h / (mu * (1 + e))
+        third = orbit.third_body
+        if third is not None and third.degree is not None:
+            apo = mpmath.inf if e >= 1 else q * (1 + e) / (1 - e)
+            if apo >= third.pericentre:
+                raise SceneError(
+                    "perturbations.third_body.degree",
+                    f"the Legendre expansion assumes the body inside the perturber's orbit, but "
+                    f"the orbit's apocentre {mpmath.nstr(apo, 6)} is not below the perturber's "
+                    f"pericentre {third.pericentre:.6g}; drop 'degree' for the exact Ω",
+                )
+        if orbit.formulation == "cayley":
+            M01 = _plane_matrix_at(orbit.plane, t)
+            n = frames.matvec(frames.transpose(M01), [c / h for c in H])
+            sin_phi = mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
+            limit = _mpf(orbit.equatorial_limit)
+            if sin_phi <= limit:
+                raise SceneError(
+                    "orbit.formulation",
+                    f"'cayley' needs sin Φ > orbit.equatorial_limit = {orbit.equatorial_limit}, "
+                    f"but the orbit starts at sin Φ = {mpmath.nstr(sin_phi, 6)} (Θ and Σ are "
+                    "ill-defined near Φ = 0 or π); use formulation = 'quaternion' (regular at "
+                    "every inclination) or 'cartesian'",
+                )
+
+
+def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
+    """Position and velocity at the start time, in mpmath at the current precision."""
+    if orbit.initial[0] == "cartesian":
+        _, x, v = orbit.initial
+        return [_mpf(c) for c in x], [_mpf(c) for c in v]
+    values = {k: _mpf(v) for k, v in orbit.initial[1].items()}
+    return el.elements_to_cartesian(
+        el.Elements(**values), _mpf(orbit.mu), frame=_plane_angles_at(orbit.plane, t)
+    )
+
+
+def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
+    """The formulation's initial state as decimal text with ``dps`` digits."""
+    with mpmath.workdps(dps):
+        t = _mpf(t)
+        x, v = initial_cartesian(orbit, t)
+        if orbit.formulation == "cartesian":
+            values = [*x, *v]
+        else:
+            frame = _plane_angles_at(orbit.plane, t)
+            s = el.cartesian_to_cayley(x, v, sigma=_mpf(orbit.sigma0), frame=frame)
+            values = [s.r, s.rdot, s.rho, s.h]
+            if orbit.formulation == "cayley":
+                values += [s.Theta, s.Sigma, s.Phi]
+            else:
+                values += _plane_quaternion(frame, (s.Theta, s.Sigma, s.Phi))
+        return [mpmath.nstr(c, dps, strip_zeros=False) for c in values]
+
+
+# ---------------------------------------------------------------------- the formulations
+class _Builder:
+    """Collects the system, the position and velocity expressions and the outputs."""
+
+    def __init__(self, orbit, pars, plane, mu, Omega, g, X) -> None:
+        self.orbit, self.pars, self.plane, self.mu = orbit, pars, plane, mu
+        self.Omega, self.g, self.X = Omega, g, X
+        self.system: list[tuple[Any, Any]] = []
+        self.initial: list[str] = []
+        self.outputs: dict[str, Any] = {}
+        self.terminal: list[TerminalSpec] = []
+        self.position: list[Any] = []
+        self.velocity: list[Any] = []
+        self.momentum: list[Any] = []  # x × v
+        self.normal: list[Any] = []  # of the orbit, in frame 0
+        self.node_function: Any = None
+        self.apsis_function: Any = None
+        self.radius: Any = None
+
+    def equatorial_limit(self) -> Any:
+        """The parameter holding ε = orbit.equatorial_limit (allocated on first use)."""
+        name = "orbit.equatorial_limit"
+        if name in self.pars.names:
+            return hy.par[self.pars.index(name)]
+        return self.pars.add(name, self.orbit.equatorial_limit)
+
+    def at_position(self, expr: Any) -> Any:
+        """An expression of the Cartesian placeholders, composed with the position."""
+        return hy.subs(expr, {str(x): p for x, p in zip(self.X, self.position, strict=True)})
+
+    def cartesian(self, start: list[str]) -> None:
+        x = self.X
+        v = list(hy.make_vars(*CARTESIAN[3:]))
+        rhs = eq.cartesian_rates(x, v, self.mu, self.g)
+        self.system = list(zip([*x, *v], rhs, strict=True))
+        self.initial = start
+        self.position, self.velocity = x, v
+        self.momentum = frames.cross(x, v)
+        self.outputs = dict(zip(CARTESIAN, [*x, *v], strict=True))
+        self.node_function = frames.dot(self._plane_normal(), x)
+        self.apsis_function = frames.dot(x, v)
+        self.radius = hy.sqrt(frames.dot(x, x))
+
+    def cayley(self, start: list[str]) -> None:
+        r, rdot, rho, h, Theta, Sigma, Phi = hy.make_vars(*CAYLEY)
+        u = rho - Sigma
+        axes, _ = eq.cayley_axes(Theta, Phi, u, self.plane)
+        partials = self._partials(r, axes)
+        rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
+        rhs += eq.plane_rates(u, h, Phi, partials[2], self.plane, Theta)
+        self.system = list(zip([r, rdot, rho, h, Theta, Sigma, Phi], rhs, strict=True))
+        self.initial = start
+        self._kinematics(r, rdot, h, axes)
+        self.outputs.update(zip(CAYLEY, [r, rdot, rho, h, Theta, Sigma, Phi], strict=True))
+        self.node_function = hy.sin(u)
+        limit = self.orbit.equatorial_limit
+        plane_turns = self.plane is not None and (
+            self.plane.theta_rate is not None or self.plane.phi_rate is not None
+        )
+        if exact_fraction(limit) > 0 and (self.g is not None or plane_turns):
+            eps = self.equatorial_limit()
+            stop = TerminalSpec(hy.sin(Phi) - eps, -1, _EquatorialStop(limit), "equatorial_stops")
+            self.terminal.append(stop)
+
+    def quaternion(self, start: list[str]) -> None:
+        r, rdot, rho, h = hy.make_vars(*CAYLEY[:4])
+        q = list(hy.make_vars(*QUATERNION))
+        axes = eq.quaternion_axes(q, rho)
+        partials = self._partials(r, axes)
+        rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
+        rhs += eq.quaternion_rates(q, rho, h, partials[2])
+        self.system = list(zip([r, rdot, rho, h, *q], rhs, strict=True))
+        self.initial = start
+        self._kinematics(r, rdot, h, axes)
+        # Θ, Σ, Φ read off M₁₂ = M₀₁ᵀ ℛ(q) (notes §10), for output only.
+        M02 = eq.quaternion_matrix(q)
+        M12 = (
+            M02 if self.plane is None else frames.matmul(frames.transpose(self.plane.matrix()), M02)
+        )
+        Theta = hy.atan2(M12[0][2], -M12[1][2])
+        Phi = hy.atan2(hy.sqrt(M12[0][2] ** 2 + M12[1][2] ** 2), M12[2][2])
+        Sigma = hy.atan2(-M12[2][0], M12[2][1])
+        self.outputs.update(zip(CAYLEY, [r, rdot, rho, h, Theta, Sigma, Phi], strict=True))
+        self.outputs.update(zip(QUATERNION, q, strict=True))
+        self.node_function = frames.dot(self._plane_normal(), axes.radial)
+
+    def _partials(self, r, axes: eq.OrbitAxes) -> tuple:
+        if self.g is None:
+            return None, None, None
+        self.position = [r * c for c in axes.radial]
+        g = [self.at_position(gi) for gi in self.g]
+        return eq.cayley_partials(g, r, axes)
+
+    def _kinematics(self, r, rdot, h, axes: eq.OrbitAxes) -> None:
+        """x = r x̂₃, ẋ = ṙ x̂₃ + (h/r) ŷ₃ (§5), x × v = h n̂."""
+        self.position = [r * c for c in axes.radial]
+        self.velocity = [
+            rdot * a + h / r * b for a, b in zip(axes.radial, axes.transverse, strict=True)
+        ]
+        self.normal = axes.normal
+        self.momentum = [h * c for c in axes.normal]
+        self.outputs = dict(zip(CARTESIAN, [*self.position, *self.velocity], strict=True))
+        self.apsis_function = rdot
+        self.radius = r
+
+    def _plane_normal(self) -> list[Any]:
+        if self.plane is None:
+            return [hy.expression(0.0), hy.expression(0.0), hy.expression(1.0)]
+        M01 = self.plane.matrix()
+        return [M01[0][2], M01[1][2], M01[2][2]]
+
+
+class _EquatorialStop:
+    """Terminal-event handler: end the run, naming the way on."""
+
+    def __init__(self, limit: Any) -> None:
+        self.limit = limit
+
+    def __call__(self, ta: Any) -> str:
+        return (
+            f"the orbit plane reached sin Φ = orbit.equatorial_limit = {self.limit} at "
+            f"t = {ta.time}: below it Θ and Σ lose accuracy like ε/sin Φ (cosec Φ in their "
+            "equations). Results are kept up to here; continue with formulation = 'quaternion' "
+            "(regular at every inclination) or 'cartesian', or lower orbit.equatorial_limit to "
+            "accept the loss"
+        )
+
+
+# ---------------------------------------------------------------------- reference plane
+def _plane_angles(motion: PlaneMotion, t: Any, value: Any) -> tuple[tuple, tuple]:
+    """(θ′, σ′, φ′) and their rates at time ``t`` (None for a rate that is exactly zero).
+
+    ``value(name, number)`` builds each number: heyoka (``value`` allocates a parameter, ``t``
+    is ``hy.time``) and mpmath alike.
+    """
+
+    def rate(name: str, v: Any) -> Any:
+        # A rate that is exactly zero is left out (None), so a plane at rest compiles no
+        # time terms.
+        return None if exact_fraction(v) == 0 else value(name, v)
+
+    f = frames.functions_for(t)
+    th0, th1 = value("theta0", motion.theta0), rate("theta_rate", motion.theta_rate)
+    ph0, ph1 = value("phi0", motion.phi0), rate("phi_rate", motion.phi_rate)
+    sg0 = value("sigma0", motion.sigma0)
+    theta = th0 if th1 is None else th0 + th1 * t
+    phi = ph0 if ph1 is None else ph0 + ph1 * t
+    if not motion.departure_point:
+        sg1 = rate("sigma_rate", motion.sigma_rate)
+        sigma = sg0 if sg1 is None else sg0 + sg1 * t
+    elif th1 is None:
+        sg1, sigma = None, sg0
+    elif ph1 is None:
+        sg1 = th1 * f.cos(ph0)
+        sigma = sg0 + sg1 * t
+    else:
+        # σ′ = σ′₀ + θ̇′(sin φ′ − sin φ′₀)/φ̇′, written without the cancelling difference.
+        half = ph1 * t / 2
+        sigma = sg0 + 2 * th1 * f.cos(ph0 + half) * f.sin(half) / ph1
+        sg1 = th1 * f.cos(phi)
+    return (theta, sigma, phi), (th1, sg1, ph1)
+
+
+def _plane_expressions(motion: PlaneMotion | None, pars: ParTable) -> eq.ReferencePlane | None:
+    if motion is None:
+        return None
+
+    def value(name: str, v: Any) -> Any:
+        return pars.add(f"reference_plane.{name}", v)
+
+    (theta, sigma, phi), (th1, sg1, ph1) = _plane_angles(motion, hy.time, value)
+    return eq.ReferencePlane(theta, sigma, phi, th1, sg1, ph1, motion.departure_point)
+
+
+def _plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
+    """(θ′, σ′, φ′) at time t in mpmath (zeros for the fixed frame)."""
+    if motion is None:
+        return (mpmath.mpf(0),) * 3
+    return _plane_angles(motion, _mpf(t), lambda _, v: _mpf(v))[0]
+
+
+def _plane_matrix_at(motion: PlaneMotion | None, t: Any) -> frames.Matrix:
+    return frames.plane_matrix(*_plane_angles_at(motion, t))
+
+
+def _plane_quaternion(frame: tuple, angles: tuple) -> list:
+    """q of M₀₂ = M(θ′, σ′, φ′) M(Θ, Σ, Φ) as a product of axis quaternions (notes §10)."""
+
+    def axis(k: int, a: Any) -> list:
+        q = [mpmath.cos(a / 2), mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)]
+        q[k] = mpmath.sin(a / 2)
+        return q
+
+    q = [mpmath.mpf(1), mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)]
+    for theta, sigma, phi in (frame, angles):
+        for factor in (axis(3, theta), axis(1, phi), axis(3, -sigma)):
+            q = _hamilton(q, factor)
+    return q
+
+
+def _hamilton(a: list, b: list) -> list:
+    return [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+
+
+def _start_time(scene: Scene) -> Any:
+    grid = scene.output
+    return grid.times[0] if grid.times is not None else grid.grid[0]
+
+
+def _mpf(value: Any) -> mpmath.mpf:
+    f = exact_fraction(value) if not isinstance(value, mpmath.mpf) else None
+    return value if f is None else mpmath.mpf(f.numerator) / f.denominator
+
+
+# ---------------------------------------------------------------------- monitors and events
+def _monitors(orbit: Orbit, b: _Builder, pars: ParTable) -> tuple[dict, tuple]:
+    """Energy; the Jacobi constant (circular perturber); k̂·(x × v) (zonal field)."""
+    v2 = frames.dot(b.velocity, b.velocity)
+    energy = v2 / 2 - b.mu / b.radius
+    if b.Omega is not None:
+        energy = energy - b.at_position(b.Omega)
+    monitors: dict[str, Any] = {"energy": energy}
+    conserved: list[str] = [] if orbit.time_dependent else ["energy"]
+    monitors["angular_momentum"] = list(b.momentum)
+    if not orbit.perturbations:
+        conserved.append("angular_momentum")
+    third, zonal = orbit.third_body, orbit.zonal
+    if third is not None and third.circular:
+        # In the frame turning with the perturber, H − n k̂₃·(x × v) is conserved.
+        n = hy.par[pars.index("third_body.n")]
+        k3 = third.normal(pars)
+        monitors["jacobi"] = energy - n * frames.dot(k3, b.momentum)
+        others = [p for p in orbit.perturbations if p is not third]
+        if not others:
+            conserved.append("jacobi")
+    if zonal is not None:
+        k = [hy.par[pars.index(f"zonal.axis[{i}]")] for i in range(3)]
+        norm = hy.sqrt(frames.dot(k, k))
+        monitors["polar_momentum"] = frames.dot(k, b.momentum) / norm
+        if len(orbit.perturbations) == 1:
+            conserved.append("polar_momentum")
+    return monitors, tuple(conserved)
+
+
+def _events(scene: Scene, orbit: Orbit, b: _Builder, pars: ParTable) -> list[EventSpec]:
+    events: list[EventSpec] = []
+    for name in scene.output.events:
+        if name == "node":
+            labels = {1: "ascending", -1: "descending"}
+            events.append(EventSpec(name, "node", b.node_function, labels=labels))
+        elif name == "apsis":
+            labels = {1: "pericentre", -1: "apocentre"}
+            events.append(EventSpec(name, "apsis", b.apsis_function, labels=labels))
+        elif name == "equatorial":
+            labels = {-1: "approach", 1: "recede"}
+            events.append(EventSpec(name, "equatorial", _equatorial_function(b), labels=labels))
+        elif name in scene.events:
+            ev = scene.events[name]
+            expr = parse_expression(ev.expression, b.outputs, pars, f"events.{name}.expression")
+            events.append(EventSpec(name, name, expr, ev.direction))
+        else:
+            known = [*EVENTS, *scene.events]
+            raise SceneError("output.events", f"unknown event {name!r}; known: {known}")
+    for name in scene.events:
+        if name not in scene.output.events:
+            raise SceneError(f"events.{name}", "is defined but not listed in output.events")
+    return events
+
+
+def _equatorial_function(b: _Builder) -> Any:
+    """(sin²Φ − ε²)|L|², zero where sin Φ = ε; no square root, no division."""
+    eps = b.equatorial_limit()
+    L = b.momentum
+    c = frames.dot(b._plane_normal(), L)
+    return frames.dot(L, L) * (1 - eps * eps) - c * c

@@ -1,0 +1,138 @@
+"""The orbit scene tables: what they accept, and the errors that name the field."""
+
+from __future__ import annotations
+
+import copy
+import re
+
+import pytest
+
+from cayley_heyoka import Scene, SceneError
+from cayley_heyoka.families import FAMILIES
+
+
+def scene(**changes) -> dict:
+    """Reference case R1 (J2, fixed plane); ``changes`` maps 'table.key' to a value (None: drop)."""
+    d = {
+        "orbit": {
+            "mu": "1",
+            "position": ["0.9", "0.2", "0.1"],
+            "velocity": ["-0.25", "0.85", "0.45"],
+        },
+        "perturbations": {"zonal": {"J2": "0.0010826", "radius": "0.8"}},
+        "output": {"times": {"start": "0", "stop": "1", "count": 2}},
+    }
+    d = copy.deepcopy(d)
+    for path, value in changes.items():
+        *head, last = path.split(".")
+        table = d
+        for key in head:
+            table = table.setdefault(key, {})
+        if value is None:
+            table.pop(last, None)
+        else:
+            table[last] = value
+    return d
+
+
+def test_valid_scene_parses_with_defaults():
+    s = Scene.from_dict(scene())
+    assert s.family == "orbit"
+    assert s.model.formulation == "cayley"
+    assert s.model.plane is None
+
+
+@pytest.mark.parametrize(
+    ("changes", "field", "text"),
+    [
+        ({"orbit.mu": "-1"}, "orbit.mu", "> 0"),
+        ({"orbit.mu": None}, "orbit.mu", "required"),
+        ({"orbit.position": ["nan", "0", "0"]}, "orbit.position[0]", "finite"),
+        ({"orbit.velocity": ["0", "inf", "0"]}, "orbit.velocity[1]", "finite"),
+        ({"orbit.velocity": ["0.9", "0.2", "0.1"]}, "orbit.velocity", "rectilinear"),
+        ({"orbit.position": [0, 0, 0]}, "orbit.position", "origin"),
+        ({"orbit.formulation": "kepler"}, "orbit.formulation", "one of"),
+        ({"orbit.fomulation": "cayley"}, "orbit.fomulation", "did you mean 'formulation'"),
+        ({"orbit.equatorial_limit": "1"}, "orbit.equatorial_limit", r"\[0, 1\)"),
+        ({"perturbations.zonal.radius": "-0.8"}, "perturbations.zonal.radius", "> 0"),
+        ({"perturbations.zonal.J1": "0.1"}, "perturbations.zonal.J1", "degree"),
+        ({"perturbations.zonal.axis": [0, 0, 0]}, "perturbations.zonal.axis", "nonzero"),
+        (
+            {"perturbations.third_body": {"gm": "0.01", "a": "4"}},
+            "perturbations.third_body.n",
+            "required",
+        ),
+        (
+            {"perturbations.third_body": {"gm": "0.01", "a": "4", "n": "0.1", "eccentricity": "1"}},
+            "perturbations.third_body.eccentricity",
+            r"\[0, 1\)",
+        ),
+        (
+            {"perturbations.third_body": {"gm": "-0.01", "a": "4", "n": "0.1"}},
+            "perturbations.third_body.gm",
+            "> 0",
+        ),
+        (
+            {"perturbations.third_body": {"gm": "0.01", "a": "0.9", "n": "1", "degree": 4}},
+            "perturbations.third_body.degree",
+            "inside the perturber",
+        ),
+        ({"perturbations.drag": {}}, "perturbations.drag", "unknown key"),
+        ({"reference_plane.theta_dot": "0.1"}, "reference_plane.theta_dot", "did you mean"),
+    ],
+)
+def test_bad_input_names_the_field(changes, field, text):
+    with pytest.raises(SceneError, match=text) as info:
+        Scene.from_dict(scene(**changes))
+    assert info.value.field == field
+
+
+def test_elements_input_checks_the_eccentricity():
+    el = {
+        "a": "1",
+        "e": "1",
+        "inclination": "0.3",
+        "node": "0",
+        "argument_of_pericentre": "0",
+        "mean_anomaly": "0",
+    }
+    d = scene(**{"orbit.position": None, "orbit.velocity": None, "orbit.elements": el})
+    with pytest.raises(SceneError, match=r"elliptic element set") as info:
+        Scene.from_dict(d)
+    assert info.value.field == "orbit.elements.e"
+    d["orbit"]["elements"]["e"] = "0.1"
+    d["orbit"]["position"] = ["1", "0", "0"]
+    with pytest.raises(SceneError, match="not both"):
+        Scene.from_dict(d)
+
+
+def test_cayley_refuses_a_start_near_the_reference_plane():
+    d = scene(**{"orbit.velocity": ["-0.2", "0.9", "1e-5"], "orbit.position": ["1", "0", "0"]})
+    with pytest.raises(SceneError, match="quaternion") as info:
+        Scene.from_dict(d)
+    assert info.value.field == "orbit.formulation"
+    d["orbit"]["formulation"] = "quaternion"
+    Scene.from_dict(d)
+
+
+def test_sigma0_has_no_meaning_for_cartesian():
+    with pytest.raises(SceneError, match="no meaning"):
+        Scene.from_dict(scene(**{"orbit.formulation": "cartesian", "orbit.sigma0": "0.1"}))
+
+
+def test_only_the_terms_named_are_compiled():
+    """No perturbation, plane-rate or departure terms appear unless the scene turns them on."""
+    build = FAMILIES["orbit"].build
+    kepler = build(Scene.from_dict(scene(**{"perturbations": None})))
+    assert kepler.pars.names == ["mu"]  # Φ is constant: no equatorial stop either
+    assert [str(rhs) for _, rhs in kepler.system[3:]] == ["0.0000000000000000"] * 4
+    assert not kepler.terminal
+    j2 = build(Scene.from_dict(scene()))
+    assert not any(n.startswith(("third_body", "reference_plane")) for n in j2.pars.names)
+    at_rest = build(Scene.from_dict(scene(reference_plane={"theta0": "0.3", "phi0": "0.2"})))
+    assert not any("rate" in n for n in at_rest.pars.names)
+    assert not any(re.search(r"\bt\b", str(rhs)) for _, rhs in at_rest.system)  # no time
+    turning = build(Scene.from_dict(scene(reference_plane={"theta_rate": "0.01", "phi0": "0.4"})))
+    assert "reference_plane.theta_rate" in turning.pars.names
+    assert "reference_plane.phi_rate" not in turning.pars.names
+    assert "reference_plane.sigma_rate" not in turning.pars.names
