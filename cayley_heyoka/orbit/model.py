@@ -27,6 +27,7 @@ from . import elements as el
 from . import equations as eq
 from . import frames
 from .disturbing import Context, disturbing_function, gradient
+from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
 
 CARTESIAN = ("x", "y", "z", "vx", "vy", "vz")
@@ -48,7 +49,7 @@ def build_model(scene: Scene) -> Model:
     g = gradient(Omega, X) if Omega is not None else None
     start = initial_state(orbit, _start_time(scene), prec.dps + _GUARD_DIGITS)
 
-    b = _Builder(orbit, pars, plane, mu, Omega, g, X)
+    b = _Builder(orbit, pars, plane, mu, Omega, g, X, prec)
     if orbit.formulation == "cartesian":
         b.cartesian(start)
     elif orbit.formulation == "cayley":
@@ -150,8 +151,9 @@ def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
 class _Builder:
     """Collects the system, the position and velocity expressions and the outputs."""
 
-    def __init__(self, orbit, pars, plane, mu, Omega, g, X) -> None:
+    def __init__(self, orbit, pars, plane, mu, Omega, g, X, precision) -> None:
         self.orbit, self.pars, self.plane, self.mu = orbit, pars, plane, mu
+        self.precision = precision
         self.Omega, self.g, self.X = Omega, g, X
         self.system: list[tuple[Any, Any]] = []
         self.initial: list[str] = []
@@ -191,7 +193,8 @@ class _Builder:
 
     def cayley(self, start: list[str]) -> None:
         r, rdot, rho, h, Theta, Sigma, Phi = hy.make_vars(*CAYLEY)
-        u = rho - Sigma
+        turns = self._revolutions(start, rho)
+        u = turns.angle(rho) - Sigma
         axes, _ = eq.cayley_axes(Theta, Phi, u, self.plane)
         partials = self._partials(r, axes)
         rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
@@ -199,7 +202,8 @@ class _Builder:
         self.system = list(zip([r, rdot, rho, h, Theta, Sigma, Phi], rhs, strict=True))
         self.initial = start
         self._kinematics(r, rdot, h, axes)
-        self.outputs.update(zip(CAYLEY, [r, rdot, rho, h, Theta, Sigma, Phi], strict=True))
+        values = [r, rdot, turns.rho(rho), h, Theta, Sigma, Phi]
+        self.outputs.update(zip(CAYLEY, values, strict=True))
         self.node_function = hy.sin(u)
         limit = self.orbit.equatorial_limit
         plane_turns = self.plane is not None and (
@@ -213,10 +217,12 @@ class _Builder:
     def quaternion(self, start: list[str]) -> None:
         r, rdot, rho, h = hy.make_vars(*CAYLEY[:4])
         q = list(hy.make_vars(*QUATERNION))
-        axes = eq.quaternion_axes(q, rho)
+        turns = self._revolutions(start, rho)
+        angle = turns.angle(rho)
+        axes = eq.quaternion_axes(q, angle)
         partials = self._partials(r, axes)
         rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
-        rhs += eq.quaternion_rates(q, rho, h, partials[2])
+        rhs += eq.quaternion_rates(q, angle, h, partials[2])
         self.system = list(zip([r, rdot, rho, h, *q], rhs, strict=True))
         self.initial = start
         self._kinematics(r, rdot, h, axes)
@@ -228,9 +234,18 @@ class _Builder:
         Theta = hy.atan2(M12[0][2], -M12[1][2])
         Phi = hy.atan2(hy.sqrt(M12[0][2] ** 2 + M12[1][2] ** 2), M12[2][2])
         Sigma = hy.atan2(-M12[2][0], M12[2][1])
-        self.outputs.update(zip(CAYLEY, [r, rdot, rho, h, Theta, Sigma, Phi], strict=True))
+        values = [r, rdot, turns.rho(rho), h, Theta, Sigma, Phi]
+        self.outputs.update(zip(CAYLEY, values, strict=True))
         self.outputs.update(zip(QUATERNION, q, strict=True))
         self.node_function = frames.dot(self._plane_normal(), axes.radial)
+
+    def _revolutions(self, start: list[str], rho: Any) -> Revolutions:
+        """Whole turns of ρ kept out of the state (:mod:`.revolutions`); ρ₀ = start[2] is
+        replaced by its reduced value."""
+        turns = Revolutions(self.pars, self.precision, start[2], 2)
+        start[2] = turns.initial_rho
+        self.terminal.append(TerminalSpec(turns.event(rho), 1, turns, "revolutions"))
+        return turns
 
     def _partials(self, r, axes: eq.OrbitAxes) -> tuple:
         if self.g is None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import re
 
+import numpy as np
 import pytest
 
 from cayley_heyoka import Scene, SceneError
@@ -124,9 +125,10 @@ def test_only_the_terms_named_are_compiled():
     """No perturbation, plane-rate or departure terms appear unless the scene turns them on."""
     build = FAMILIES["orbit"].build
     kepler = build(Scene.from_dict(scene(**{"perturbations": None})))
-    assert kepler.pars.names == ["mu"]  # Φ is constant: no equatorial stop either
+    # μ and the revolutions of ρ (orbit/revolutions.py) only; Φ is constant: no equatorial stop.
+    assert kepler.pars.names == ["mu", "orbit.two_pi", "orbit.rho_offset", "orbit.rho_phase"]
     assert [str(rhs) for _, rhs in kepler.system[3:]] == ["0.0000000000000000"] * 4
-    assert not kepler.terminal
+    assert [t.counter for t in kepler.terminal] == ["revolutions"]
     j2 = build(Scene.from_dict(scene()))
     assert not any(n.startswith(("third_body", "reference_plane")) for n in j2.pars.names)
     at_rest = build(Scene.from_dict(scene(reference_plane={"theta0": "0.3", "phi0": "0.2"})))
@@ -136,3 +138,29 @@ def test_only_the_terms_named_are_compiled():
     assert "reference_plane.theta_rate" in turning.pars.names
     assert "reference_plane.phi_rate" not in turning.pars.names
     assert "reference_plane.sigma_rate" not in turning.pars.names
+
+
+@pytest.mark.parametrize("formulation", ["cayley", "quaternion"])
+def test_rho_is_reduced_in_the_state_and_continuous_in_the_output(formulation):
+    """ρ grows ~2π per orbit; the state keeps it in [0, 2π) and the output adds the turns.
+
+    R1 over ~10 orbits: ρ goes from 0.233 to 63.5, so about ten revolutions are moved out of the
+    state; the reported ρ must be continuous and increasing on a dense grid (ρ̇ = h/r² ≥ 0.9)
+    and equal the integrated ρ̇ = h/r² to round-off.
+    """
+    from cayley_heyoka import run
+
+    d = scene(**{"orbit.formulation": formulation, "output.times.stop": "50"})
+    d["output"]["times"]["count"] = 2001
+    res = run(Scene.from_dict(d))
+    assert res.counters["revolutions"] == 10
+    rho = res["rho"]
+    steps = np.diff(rho)
+    dt = float(res.t[1] - res.t[0])
+    # Increments between grid points: h/r² · dt within [0.5, 2] · dt for this orbit, never a
+    # jump of ±2π at a revolution.
+    assert np.all(steps > 0.5 * dt) and np.all(steps < 2.0 * dt)
+    # Trapezoidal integral of h/r² (second order in dt = 0.025: error ~1e-4·|ρ̈|·t).
+    rate = res["h"] / res["r"] ** 2
+    integral = rho[0] + np.concatenate([[0], np.cumsum((rate[1:] + rate[:-1]) / 2 * dt)])
+    assert np.max(np.abs(integral - rho)) < 1e-3

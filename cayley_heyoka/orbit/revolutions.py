@@ -1,0 +1,90 @@
+"""Keeping the departure ρ small: whole revolutions are moved out of the integrated state.
+
+ρ grows by about 2π per orbit. Integrated as it is, it would lose absolute accuracy like its
+own ulp (after 1000 orbits ρ ≈ 6000 carries ~1e-12 per rounding, against ~1e-15 for the other
+variables), and heyoka's error control, which scales the tolerance by the largest state
+component, would loosen the step for every variable by the same factor (notes §10, practical
+note).
+
+So the integrator carries ``ρ_s = ρ − k C``, where ``C`` is 2π rounded to the run's precision
+and ``k`` an integer held in runtime parameters. A terminal event at ``ρ_s = C`` (ρ only
+increases: ρ̇ = h/r² > 0) subtracts ``C`` — exactly, by Sterbenz's lemma — and adds one to ``k``.
+The equations need ρ only modulo 2π (through ``u = ρ − Σ``, or cos ρ and sin ρ), which is
+``ρ_s + k (C − 2π)``: the *phase* parameter ``k (C − 2π)``, computed exactly and rounded once,
+removes the rounding of 2π, which would otherwise accumulate k times. The reported ρ is
+``ρ_s + k C`` (the *offset* parameter), continuous across the events.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mpmath
+
+from ..model import ParTable
+from ..precision import Precision
+
+Expr = Any  # a heyoka expression
+
+
+class Revolutions:
+    """The revolution count ``k`` of ρ and the parameters that carry it.
+
+    Parameters
+    ----------
+    pars
+        The model's parameter table; ``orbit.two_pi``, ``orbit.rho_offset`` and
+        ``orbit.rho_phase`` are allocated in it.
+    precision
+        The run's precision (``C`` is 2π rounded to it).
+    rho0
+        ρ at the start time, as decimal text with guard digits.
+    state_index
+        Position of ρ in the integrator's state.
+    """
+
+    def __init__(self, pars: ParTable, precision: Precision, rho0: str, state_index: int) -> None:
+        self.precision = precision
+        self.state_index = state_index
+        self._dps = precision.dps + 20
+        with mpmath.workprec(precision.bits):
+            self._C = +(2 * mpmath.pi)  # exactly the value C takes in the run's precision
+        with mpmath.workdps(self._dps):
+            rho = mpmath.mpf(rho0)
+            self.k = int(mpmath.floor(rho / self._C))
+            self.initial_rho = self._text(rho - self.k * self._C)
+        self.two_pi = pars.add("orbit.two_pi", self._text(self._C))
+        self.offset = pars.add("orbit.rho_offset", self._offset_text())
+        self.phase = pars.add("orbit.rho_phase", self._phase_text())
+        self._offset_index = pars.index("orbit.rho_offset")
+        self._phase_index = pars.index("orbit.rho_phase")
+
+    def rho(self, rho_state: Expr) -> Expr:
+        """The continuous ρ, for output."""
+        return rho_state + self.offset
+
+    def angle(self, rho_state: Expr) -> Expr:
+        """An expression equal to ρ modulo 2π, for the equations."""
+        return rho_state + self.phase
+
+    def event(self, rho_state: Expr) -> Expr:
+        """Zero where the integrated ρ reaches C (crossed upwards)."""
+        return rho_state - self.two_pi
+
+    def __call__(self, ta: Any) -> None:
+        """Terminal-event handler: move one revolution from the state into the parameters."""
+        ta.state[self.state_index] -= self.precision.number(self._text(self._C))
+        self.k += 1
+        ta.pars[self._offset_index] = self.precision.number(self._offset_text())
+        ta.pars[self._phase_index] = self.precision.number(self._phase_text())
+
+    def _offset_text(self) -> str:
+        with mpmath.workdps(self._dps):
+            return self._text(self.k * self._C)
+
+    def _phase_text(self) -> str:
+        with mpmath.workdps(self._dps):
+            return self._text(self.k * (self._C - 2 * mpmath.pi))
+
+    def _text(self, value: Any) -> str:
+        return mpmath.nstr(value, self._dps, strip_zeros=False)
