@@ -12,6 +12,8 @@ built in the target precision from its decimal text.
 
 from __future__ import annotations
 
+import hashlib
+import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -125,14 +127,37 @@ class Model:
     def structure_key(self) -> str:
         """Text that identifies the compiled code: equations and events, not the numbers."""
         parts = [self.family]
-        parts += [f"{v}'={rhs}" for v, rhs in self.system]
-        parts += [f"event {e.name}/{e.label}/{e.direction}: {e.expression}" for e in self.events]
-        parts += [f"terminal {e.counter}/{e.direction}: {e.expression}" for e in self.terminal]
+        parts += [f"{v}'={_fingerprint(rhs)}" for v, rhs in self.system]
+        parts += [
+            f"event {e.name}/{e.label}/{e.direction}: {_fingerprint(e.expression)}"
+            for e in self.events
+        ]
+        parts += [
+            f"terminal {e.counter}/{e.direction}: {_fingerprint(e.expression)}"
+            for e in self.terminal
+        ]
         return "\n".join(parts)
 
     def output_key(self) -> str:
         """Text that identifies the compiled evaluator of outputs and monitors."""
         parts = [self.family, ",".join(self.state_names)]
-        parts += [f"{k}={v}" for k, v in self.outputs.items()]
-        parts += [f"{k}={v}" for k, v in self.monitors.items()]
+        parts += [f"{k}={_fingerprint(v)}" for k, v in self.outputs.items()]
+        parts += [f"{k}={_fingerprint(v)}" for k, v in self.monitors.items()]
         return "\n".join(parts)
+
+    def size(self) -> int:
+        """Bytes of the serialised right-hand sides: a measure of the code to compile."""
+        return sum(len(pickle.dumps(rhs)) for _, rhs in self.system)
+
+
+def _fingerprint(expr: Expr | list[Expr]) -> str:
+    """A digest of the whole expression tree.
+
+    Not ``str(expr)``: heyoka elides the middle of long expressions when printing them, so two
+    systems differing only there would print alike (and share a compiled integrator).
+    """
+    exprs = expr if isinstance(expr, list) else [expr]
+    digest = hashlib.sha256()
+    for e in exprs:
+        digest.update(pickle.dumps(e))
+    return digest.hexdigest()
