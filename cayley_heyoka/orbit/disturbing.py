@@ -15,10 +15,11 @@ scenes differing only in numbers share one compiled integrator.
 ``[perturbations.third_body]``
     ``gm``, semi-major axis ``a``, mean motion ``n``, ``eccentricity`` (default 0),
     ``inclination``, ``node``, ``argument_of_pericentre`` (defaults 0) and ``mean_anomaly0``
-    (mean anomaly at t = 0): a prescribed Keplerian orbit about the central body. Direct plus
-    indirect part ``Ω = Gm₃ (1/|x − x₃| − x·x₃/|x₃|³)``, exact; with ``degree = N`` its Legendre
-    expansion ``Gm₃/r₃ Σ_{l=2..N} (r/r₃)ˡ Pₗ(cos ψ)``, valid only for a body inside the
-    perturber's orbit.
+    (mean anomaly at t = 0) or ``mean_longitude0`` (node + argument of pericentre + mean
+    anomaly at t = 0; one of the two): a prescribed Keplerian orbit about the central body.
+    Direct plus indirect part ``Ω = Gm₃ (1/|x − x₃| − x·x₃/|x₃|³)``, exact; with
+    ``degree = N`` its Legendre expansion ``Gm₃/r₃ Σ_{l=2..N} (r/r₃)ˡ Pₗ(cos ψ)``, valid only
+    for a body inside the perturber's orbit.
 ``[perturbations.potential]``
     ``Omega``: text over ``x``, ``y``, ``z``, ``r`` and ``t`` (see :mod:`..expressions`).
 """
@@ -122,6 +123,7 @@ class ThirdBody:
     node: Number = 0
     argument_of_pericentre: Number = 0
     mean_anomaly0: Number = 0
+    mean_longitude0: Number | None = None
     degree: int | None = None
     time_dependent = True
 
@@ -133,6 +135,7 @@ class ThirdBody:
             "node",
             "argument_of_pericentre",
             "mean_anomaly0",
+            "mean_longitude0",
             "degree",
         ]
         check_keys(table, ["gm", "a", "n", *optional], where)
@@ -147,6 +150,15 @@ class ThirdBody:
         inc = number(table.get("inclination", 0), f"{where}.inclination")
         if not 0 <= exact_fraction(inc) <= math.pi:
             raise SceneError(f"{where}.inclination", f"must be in [0, π], got {inc}")
+        if "mean_anomaly0" in table and "mean_longitude0" in table:
+            raise SceneError(
+                f"{where}.mean_longitude0",
+                "give either mean_anomaly0 or mean_longitude0 (= node + argument_of_pericentre "
+                "+ mean anomaly), not both",
+            )
+        longitude = table.get("mean_longitude0")
+        if longitude is not None:
+            longitude = number(longitude, f"{where}.mean_longitude0")
         degree = table.get("degree")
         if degree is not None and (
             isinstance(degree, bool) or not isinstance(degree, int) or not 2 <= degree <= 40
@@ -161,6 +173,7 @@ class ThirdBody:
             number(table.get("node", 0), f"{where}.node"),
             number(table.get("argument_of_pericentre", 0), f"{where}.argument_of_pericentre"),
             number(table.get("mean_anomaly0", 0), f"{where}.mean_anomaly0"),
+            longitude,
             degree,
         )
 
@@ -185,7 +198,10 @@ class ThirdBody:
         i = pars.add("third_body.inclination", self.inclination)
         node = pars.add("third_body.node", self.node)
         w = pars.add("third_body.argument_of_pericentre", self.argument_of_pericentre)
-        M0 = pars.add("third_body.mean_anomaly0", self.mean_anomaly0)
+        if self.mean_longitude0 is None:
+            M0 = pars.add("third_body.mean_anomaly0", self.mean_anomaly0)
+        else:
+            M0 = pars.add("third_body.mean_longitude0", self.mean_longitude0) - node - w
         M = M0 + n * hy.time
         if self.circular:
             plane = [a * hy.cos(w + M), a * hy.sin(w + M), hy.expression(0.0)]
