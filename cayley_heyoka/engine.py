@@ -85,7 +85,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
     ta = hy.taylor_adaptive(
         model.system,
         prec.array(model.initial_state),
-        pars=prec.array(model.pars.values),
+        pars=prec.array(model.pars.values[: model.integrator_parameters()]),
         compact_mode=compact,
         high_accuracy=options.high_accuracy,
         nt_events=nt_events,
@@ -126,7 +126,11 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     grid = scene.output.time_grid(prec)
     ta.time = grid[0]
     ta.state[:] = prec.array(model.initial_state)
-    ta.pars[:] = prec.array(model.pars.values)
+    # The whole parameter vector (outputs may use parameters the equations do not); the
+    # integrator holds its leading part, copied back whenever a handler changes it.
+    pars = prec.array(model.pars.values)
+    held = len(ta.pars)
+    ta.pars[:] = pars[:held]
 
     callback = _ProgressCallback(progress) if progress else None
     # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
@@ -149,14 +153,15 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
             counters["steps"] += res[3]
             states.append(out)
             # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
-            pars_rows += [ta.pars.copy() for _ in range(len(out))]
+            pars_rows += [pars.copy() for _ in range(len(out))]
             i += len(out)
         code = int(outcome)
         if outcome == hy.taylor_outcome.time_limit:
             continue
         if -len(model.terminal) <= code <= -1:
             spec = model.terminal[-code - 1]
-            stop = spec.handle(ta)
+            stop = spec.handle(ta, pars)
+            ta.pars[:] = pars[:held]
             counters[spec.counter] += 1
             if stop is not None:
                 status, message = -1, stop

@@ -72,15 +72,17 @@ class EventSpec:
 class TerminalSpec:
     """A terminal event that lets the family act on the integrator.
 
-    ``handle(integrator)`` is called with the integrator stopped at the event; it may change
-    the state and the parameters (e.g. re-base an attitude chart), and the run goes on; or it
-    returns a message, and the run ends there with that message (results kept). ``counter``
-    names the tally of its occurrences in :attr:`Result.counters`.
+    ``handle(integrator, pars)`` is called with the integrator stopped at the event and the
+    model's whole parameter vector ``pars`` (the integrator holds only the leading ones its
+    equations use; the engine copies them back after the call). It may change the state and
+    ``pars`` (e.g. re-base an attitude chart), and the run goes on; or it returns a message,
+    and the run ends there with that message (results kept). ``counter`` names the tally of
+    its occurrences in :attr:`Result.counters`.
     """
 
     expression: Expr
     direction: int
-    handle: Callable[[Any], str | None]
+    handle: Callable[[Any, Any], str | None]
     counter: str
 
 
@@ -144,6 +146,17 @@ class Model:
         parts += [f"{k}={_fingerprint(v)}" for k, v in self.outputs.items()]
         parts += [f"{k}={_fingerprint(v)}" for k, v in self.monitors.items()]
         return "\n".join(parts)
+
+    def integrator_parameters(self) -> int:
+        """How many leading parameters the equations and events use (heyoka's ``pars`` size).
+
+        Parameters used only by outputs or monitors may follow them; heyoka refuses a
+        parameter vector longer than its equations need.
+        """
+        exprs = [rhs for _, rhs in self.system]
+        exprs += [e.expression for e in self.events] + [e.expression for e in self.terminal]
+        used = [int(str(p)[1:]) for p in hy.get_params(exprs)]
+        return max(used) + 1 if used else 0
 
     def size(self) -> int:
         """Bytes of the serialised right-hand sides: a measure of the code to compile."""

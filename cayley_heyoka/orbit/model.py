@@ -279,7 +279,7 @@ class _EquatorialStop:
     def __init__(self, limit: Any) -> None:
         self.limit = limit
 
-    def __call__(self, ta: Any) -> str:
+    def __call__(self, ta: Any, pars: Any) -> str:
         return (
             f"the orbit plane reached sin Φ = orbit.equatorial_limit = {self.limit} at "
             f"t = {ta.time}: below it Θ and Σ lose accuracy like ε/sin Φ (cosec Φ in their "

@@ -71,12 +71,12 @@ class Revolutions:
         """Zero where the integrated ρ reaches C (crossed upwards)."""
         return rho_state - self.two_pi
 
-    def __call__(self, ta: Any) -> None:
+    def __call__(self, ta: Any, pars: Any) -> None:
         """Terminal-event handler: move one revolution from the state into the parameters."""
         ta.state[self.state_index] -= self.precision.number(self._text(self._C))
         self.k += 1
-        ta.pars[self._offset_index] = self.precision.number(self._offset_text())
-        ta.pars[self._phase_index] = self.precision.number(self._phase_text())
+        pars[self._offset_index] = self.precision.number(self._offset_text())
+        pars[self._phase_index] = self.precision.number(self._phase_text())
 
     def _offset_text(self) -> str:
         with mpmath.workdps(self._dps):

@@ -69,14 +69,15 @@ class RodriguesAtlas:
     def _momentum_in_base(self, base: np.ndarray) -> list[Any]:
         return att.matvec(att.transpose(att.quaternion_to_matrix(list(base))), self.momentum_space)
 
-    def rebase(self, ta: Any) -> None:
-        """Fold the chart into the base; called with the integrator stopped at the event."""
+    def rebase(self, ta: Any, pars: np.ndarray) -> None:
+        """Fold the chart into the base; called with the integrator stopped at the event and
+        the model's parameter vector."""
         rho = list(ta.state[self.state_slice])
-        base = ta.pars[self._base_index : self._base_index + 4]
+        base = pars[self._base_index : self._base_index + 4]
         new = np.array(att.quaternion_multiply(list(base), att.rodrigues_to_quaternion(rho)))
         new = new / np.sqrt(np.sum(new * new))
-        ta.pars[self._base_index : self._base_index + 4] = new
+        pars[self._base_index : self._base_index + 4] = new
         ta.state[self.state_slice] = 0 * new[:3]
         if self.momentum_space is not None:
             gb = self._momentum_in_base(new)
-            ta.pars[self._momentum_index : self._momentum_index + 3] = np.array(gb)
+            pars[self._momentum_index : self._momentum_index + 3] = np.array(gb)
