@@ -50,6 +50,9 @@ def _run(args: argparse.Namespace) -> int:
     except IntegrationError as exc:
         result, code = exc.result, 1
         print(f"error: {exc}", file=sys.stderr)
+    except SceneError as exc:  # found when the model is built (expressions, event names)
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
     finally:
         if bar:
             bar.close()

@@ -140,6 +140,7 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     states, pars_rows = [], []
     counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
     status, message = 0, "every output time was reached"
+    stopped_at = None
     i = 0
     while i < len(grid):
         if ta.time != grid[i]:
@@ -165,6 +166,8 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
             counters[spec.counter] += 1
             if stop is not None:
                 status, message = -1, stop
+                if spec.records is not None:
+                    stopped_at = (spec.records, ta.time, spec.direction)
                 break
             ta.reset_cooldowns()
             continue
@@ -186,7 +189,7 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
         variables={k: values[k] for k in model.outputs},
         monitors={k: values[k] for k in model.monitors},
         conserved=model.conserved,
-        events=_event_logs(model, ta, prec),
+        events=_event_logs(model, ta, prec, stopped_at),
         precision=prec,
         status=status,
         message=message,
@@ -286,7 +289,9 @@ def _evaluate(
     return out
 
 
-def _event_logs(model: Model, ta: Any, prec: Precision) -> dict[str, EventLog]:
+def _event_logs(
+    model: Model, ta: Any, prec: Precision, stopped_at: tuple | None
+) -> dict[str, EventLog]:
     gathered: dict[str, list[tuple[Any, int, str]]] = {}
     recorded = ta.nt_events if model.events else []
     for spec, ev in zip(model.events, recorded, strict=True):
@@ -295,6 +300,9 @@ def _event_logs(model: Model, ta: Any, prec: Precision) -> dict[str, EventLog]:
         gathered[spec.name] += [
             (t, d, spec.label_for(d)) for t, d in zip(rec.times, rec.directions, strict=True)
         ]
+    if stopped_at is not None:
+        spec, t, d = stopped_at
+        gathered.setdefault(spec.name, []).append((t, d, spec.label_for(d)))
     logs = {}
     for name, items in gathered.items():
         items.sort(key=lambda x: x[0])

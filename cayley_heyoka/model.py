@@ -77,13 +77,16 @@ class TerminalSpec:
     equations use; the engine copies them back after the call). It may change the state and
     ``pars`` (e.g. re-base an attitude chart), and the run goes on; or it returns a message,
     and the run ends there with that message (results kept). ``counter`` names the tally of
-    its occurrences in :attr:`Result.counters`.
+    its occurrences in :attr:`Result.counters`. ``records``, if given, is the recorded event
+    this stop stands for: the stop is logged as its occurrence (the same zero found twice, by
+    two root searches, could otherwise land either side of the stop).
     """
 
     expression: Expr
     direction: int
     handle: Callable[[Any, Any], str | None]
     counter: str
+    records: EventSpec | None = None
 
 
 @dataclass

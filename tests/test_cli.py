@@ -44,3 +44,39 @@ def test_failed_run_saves_partial_results(tmp_path, capsys):
     assert "non-finite" in capsys.readouterr().err
     partial = Result.load(out)
     assert not partial.success and 6 <= len(partial.t) < 21
+
+
+def test_orbit_run_stopped_at_the_equatorial_limit_saves_partial_results(tmp_path, capsys):
+    """A Cayley orbit whose reference plane tilts onto it (Φ = 0.5 − 0.05 t) stops at
+    sin Φ = 10⁻³ (t ≈ 9.98): exit 1, the way on named, the rows before the stop kept."""
+    scene = tmp_path / "equatorial.toml"
+    scene.write_text(
+        '[orbit]\nmu = 1\nformulation = "cayley"\n'
+        "elements = { a = 1, e = 0.1, inclination = 0.5, node = 0, argument_of_pericentre = 0.3,"
+        " mean_anomaly = 0 }\n"
+        "[reference_plane]\nphi_rate = 0.05\n"
+        "[integrator]\ncompact_mode = true\n"
+        '[output]\ntimes = { start = 0, stop = 20, count = 41 }\nevents = ["equatorial"]\n'
+    )
+    out = tmp_path / "equatorial.h5"
+    assert main(["run", str(scene), "--out", str(out), "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    assert "equatorial_limit" in captured.err and "quaternion" in captured.err
+    assert "STOPPED EARLY" in captured.out
+    partial = Result.load(out)
+    assert not partial.success and "quaternion" in partial.message
+    assert len(partial.t) == 20 and float(partial.t[-1]) == 9.5
+    assert partial.counters["equatorial_stops"] == 1
+    assert partial.scene["orbit"]["formulation"] == "cayley"
+    assert set(partial.variables) >= {"x", "rho", "Phi"}
+
+
+def test_scene_error_found_when_building_exits_2(tmp_path, capsys):
+    """An unknown name in a force function is found when the model is built, not at load."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [0.1, 0.2, 1]\n"
+        '[forces.potential]\nV = "nonsense * lambda"\n[output]\ntimes = [0, 1]\n'
+    )
+    assert main(["run", str(bad), "--no-progress"]) == 2
+    assert "forces.potential.V" in capsys.readouterr().err

@@ -74,7 +74,7 @@ class Zonal:
 
     @classmethod
     def parse(cls, table: Mapping[str, Any], where: str) -> Zonal:
-        keys = [k for k in table if re.fullmatch(r"J\d+", k)]
+        keys = [k for k in table if re.fullmatch(r"J[1-9]\d*", k)]
         check_keys(table, ["radius", "axis", *keys, "J2", "J3", "J4"], where)
         coeffs = []
         for key in sorted(keys, key=lambda k: int(k[1:])):

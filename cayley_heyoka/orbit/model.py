@@ -103,12 +103,18 @@ def check(scene: Scene) -> None:
                     f"the orbit's apocentre {mpmath.nstr(apo, 6)} is not below the perturber's "
                     f"pericentre {third.pericentre:.6g}; drop 'degree' for the exact Ω",
                 )
-        if orbit.formulation == "cayley":
+        plane = orbit.plane
+        turning = plane is not None and (
+            exact_fraction(plane.theta_rate) != 0 or exact_fraction(plane.phi_rate) != 0
+        )
+        # Without a disturbing function or a turning reference plane Θ, Σ, Φ are constant and
+        # no cosec Φ is compiled: any inclination will do.
+        if orbit.formulation == "cayley" and (orbit.perturbations or turning):
             M01 = _plane_matrix_at(orbit.plane, t)
             n = frames.matvec(frames.transpose(M01), [c / h for c in H])
             sin_phi = mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
             limit = _mpf(orbit.equatorial_limit)
-            if sin_phi <= limit:
+            if sin_phi <= limit or sin_phi == 0:
                 raise SceneError(
                     "orbit.formulation",
                     f"'cayley' needs sin Φ > orbit.equatorial_limit = {orbit.equatorial_limit}, "
@@ -420,8 +426,21 @@ def _events(scene: Scene, orbit: Orbit, b: _Builder, pars: ParTable) -> list[Eve
             labels = {1: "pericentre", -1: "apocentre"}
             events.append(EventSpec(name, "apsis", b.apsis_function, labels=labels))
         elif name == "equatorial":
+            if exact_fraction(orbit.equatorial_limit) == 0:
+                raise SceneError(
+                    "output.events",
+                    "'equatorial' records where sin Φ crosses orbit.equatorial_limit, which is 0 "
+                    "here (sin Φ only touches 0); give a limit > 0",
+                )
             labels = {-1: "approach", 1: "recede"}
-            events.append(EventSpec(name, "equatorial", _equatorial_function(b), labels=labels))
+            spec = EventSpec(name, "equatorial", _equatorial_function(b), labels=labels)
+            stop = next((t for t in b.terminal if t.counter == "equatorial_stops"), None)
+            if stop is None:
+                events.append(spec)
+            else:
+                # The run starts above the limit and stops at its first approach: that stop
+                # is the one occurrence, logged by the engine.
+                stop.records = spec
         elif name in scene.events:
             ev = scene.events[name]
             expr = parse_expression(ev.expression, b.outputs, pars, f"events.{name}.expression")

@@ -206,3 +206,32 @@ def test_kepler_orbit_closes_after_whole_periods(formulation):
     end = np.array([res[k][-1] for k in ("x", "y", "z")])
     assert np.max(np.abs(end - x0)) < 1e-12
     assert max(abs(res.drift("energy"))) < 1e-14
+
+
+def test_kepler_on_the_reference_plane_runs_in_cayley_form():
+    """No Ω and a fixed plane: Θ, Σ, Φ are constant, no cosec Φ is compiled, Φ = 0 is fine."""
+    from cayley_heyoka import run
+
+    d = scene(**{"perturbations": None, "orbit.velocity": ["0", "1.1", "0"]})
+    d["orbit"]["position"] = ["0.9", "0.2", "0"]
+    res = run(Scene.from_dict(d))
+    assert np.all(res["Phi"] == 0) and abs(res["z"][-1]) == 0
+
+
+def test_equatorial_event_needs_a_positive_limit():
+    d = scene(**{"orbit.equatorial_limit": "0", "output.events": ["equatorial"]})
+    with pytest.raises(SceneError, match="limit > 0") as info:
+        run_scene(d)
+    assert info.value.field == "output.events"
+
+
+def test_zonal_degree_is_written_without_leading_zeros():
+    with pytest.raises(SceneError, match="unknown key") as info:
+        Scene.from_dict(scene(**{"perturbations.zonal.J02": "0.001"}))
+    assert info.value.field == "perturbations.zonal.J02"
+
+
+def run_scene(d: dict):
+    from cayley_heyoka import run
+
+    return run(Scene.from_dict(d))
