@@ -45,7 +45,8 @@ def build_model(scene: Scene) -> Model:
     mu = pars.add("mu", orbit.mu)
     plane = _plane_expressions(orbit.plane, pars)
     X = list(hy.make_vars(*CARTESIAN[:3]))
-    Omega = disturbing_function(orbit.perturbations, X, Context(mu, pars))
+    ctx = Context(mu, pars, prec.dps + _GUARD_DIGITS)
+    Omega = disturbing_function(orbit.perturbations, X, ctx)
     g = gradient(Omega, X) if Omega is not None else None
     start = initial_state(orbit, _start_time(scene), prec.dps + _GUARD_DIGITS)
 
@@ -57,7 +58,7 @@ def build_model(scene: Scene) -> Model:
     else:
         b.quaternion(start)
 
-    monitors, conserved = _monitors(orbit, b, pars)
+    monitors, conserved = _monitors(orbit, b, ctx)
     wanted = scene.output.monitors
     if wanted is not None:
         for name in wanted:
@@ -387,7 +388,7 @@ def _mpf(value: Any) -> mpmath.mpf:
 
 
 # ---------------------------------------------------------------------- monitors and events
-def _monitors(orbit: Orbit, b: _Builder, pars: ParTable) -> tuple[dict, tuple]:
+def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
     """Energy; the Jacobi constant (circular perturber); k̂·(x × v) (zonal field)."""
     v2 = frames.dot(b.velocity, b.velocity)
     energy = v2 / 2 - b.mu / b.radius
@@ -401,16 +402,15 @@ def _monitors(orbit: Orbit, b: _Builder, pars: ParTable) -> tuple[dict, tuple]:
     third, zonal = orbit.third_body, orbit.zonal
     if third is not None and third.circular:
         # In the frame turning with the perturber, H − n k̂₃·(x × v) is conserved.
-        n = hy.par[pars.index("third_body.n")]
-        k3 = third.normal(pars)
+        n = hy.par[ctx.pars.index("third_body.n")]
+        k3 = third.normal(ctx)
         monitors["jacobi"] = energy - n * frames.dot(k3, b.momentum)
         others = [p for p in orbit.perturbations if p is not third]
         if not others:
             conserved.append("jacobi")
     if zonal is not None:
-        k = [hy.par[pars.index(f"zonal.axis[{i}]")] for i in range(3)]
-        norm = hy.sqrt(frames.dot(k, k))
-        monitors["polar_momentum"] = frames.dot(k, b.momentum) / norm
+        k = [hy.par[ctx.pars.index(f"zonal.axis_unit[{i}]")] for i in range(3)]
+        monitors["polar_momentum"] = frames.dot(k, b.momentum)
         if len(orbit.perturbations) == 1:
             conserved.append("polar_momentum")
     return monitors, tuple(conserved)
