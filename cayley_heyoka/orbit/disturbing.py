@@ -116,6 +116,18 @@ class Zonal:
             raise SceneError(f"{where}.axis", "must be a nonzero vector (the symmetry axis)")
         return cls(tuple(coeffs), radius, axis)
 
+    def coordinate_axis(self) -> int | None:
+        """The coordinate the symmetry axis lies along (0, 1, 2), or None if oblique."""
+        nonzero = [i for i, c in enumerate(self.axis) if exact_fraction(c) != 0]
+        return nonzero[0] if len(nonzero) == 1 else None
+
+    def _axial(self, x: Sequence[Expr], ctx: Context) -> Expr:
+        """``s = k̂·x``; along a coordinate axis (the default +z) no parameter is compiled."""
+        i = self.coordinate_axis()
+        if i is not None:
+            return x[i] if exact_fraction(self.axis[i]) > 0 else -x[i]
+        return frames.dot(self.unit_axis(ctx), x)
+
     def unit_axis(self, ctx: Context) -> list[Expr]:
         """k̂ as three parameters, normalised in mpmath (``zonal.axis_unit[i]``)."""
         k = [ctx.exact(c) for c in self.axis]
@@ -125,9 +137,8 @@ class Zonal:
         ]
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
-        k = self.unit_axis(ctx)
         r2 = frames.dot(x, x)
-        s = frames.dot(k, x)
+        s = self._axial(x, ctx)
         mu, R = ctx.exact(ctx.mu_value), ctx.exact(self.radius)
         terms = []
         for n, J in self.coefficients:

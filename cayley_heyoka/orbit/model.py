@@ -409,8 +409,13 @@ def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
         if not others:
             conserved.append("jacobi")
     if zonal is not None:
-        k = [hy.par[ctx.pars.index(f"zonal.axis_unit[{i}]")] for i in range(3)]
-        monitors["polar_momentum"] = frames.dot(k, b.momentum)
+        i = zonal.coordinate_axis()
+        if i is None:
+            k = [hy.par[ctx.pars.index(f"zonal.axis_unit[{j}]")] for j in range(3)]
+            monitors["polar_momentum"] = frames.dot(k, b.momentum)
+        else:
+            sign = 1 if exact_fraction(zonal.axis[i]) > 0 else -1
+            monitors["polar_momentum"] = sign * b.momentum[i]
         if len(orbit.perturbations) == 1:
             conserved.append("polar_momentum")
     return monitors, tuple(conserved)
