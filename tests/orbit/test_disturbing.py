@@ -1,0 +1,104 @@
+"""The disturbing functions against independent statements of them (numpy, textbook forms)."""
+
+from __future__ import annotations
+
+import heyoka as hy
+import numpy as np
+import pytest
+from numpy.polynomial import legendre
+
+from cayley_heyoka.model import ParTable
+from cayley_heyoka.orbit.disturbing import Context, ThirdBody, Zonal, gradient
+
+MU = 1.3
+X = np.array([[0.9, 0.2, 0.1], [-0.3, 1.1, -0.6], [0.05, -0.4, 1.7]])
+
+
+def evaluate(term, t=0.0, with_gradient=False):
+    """Ω (and ∇Ω) of one term at the points X, through heyoka's compiled functions."""
+    pars = ParTable()
+    mu = pars.add("mu", str(MU))
+    x = list(hy.make_vars("x", "y", "z"))
+    omega = term.omega(x, Context(mu, pars))
+    exprs = [omega, *gradient(omega, x)] if with_gradient else [omega]
+    cf = hy.cfunc(exprs, x)
+    values = np.array([float(v) for v in pars.values])
+    return np.array([cf(p, pars=values, time=t) for p in X])
+
+
+@pytest.mark.parametrize("axis", [(0, 0, 1), (0, 0, -2), (0.1, -0.2, 1.0)])
+def test_zonal_harmonics_are_minus_mu_jn_rn_pn_over_r_n_plus_1(axis):
+    coefficients = ((2, "1.0826e-3"), (3, "-2.5e-6"), (4, "-1.6e-6"), (7, "3e-7"))
+    term = Zonal(coefficients, "0.8", tuple(str(c) for c in axis))
+    k = np.array(axis, dtype=float) / np.linalg.norm(axis)
+    r = np.linalg.norm(X, axis=1)
+    expected = np.zeros(len(X))
+    for n, J in coefficients:
+        Pn = legendre.legval(X @ k / r, [0] * n + [1])
+        expected += -MU * float(J) * 0.8**n * Pn / r ** (n + 1)
+    np.testing.assert_allclose(evaluate(term)[:, 0], expected, rtol=1e-13)
+
+
+def test_j2_gradient_is_the_closed_form():
+    """∇Ω_J2 = (3μJ₂R²/2r⁵)[(5s²/r² − 1)x − 2s k̂] (notes §6.1)."""
+    k = np.array([0.1, -0.2, 1.0]) / np.linalg.norm([0.1, -0.2, 1.0])
+    term = Zonal(((2, "1e-3"),), "0.6", ("0.1", "-0.2", "1"))
+    got = evaluate(term, with_gradient=True)[:, 1:]
+    for p, g in zip(X, got, strict=True):
+        r, s = np.linalg.norm(p), p @ k
+        expected = 1.5 * MU * 1e-3 * 0.36 / r**5 * ((5 * s * s / r**2 - 1) * p - 2 * s * k)
+        np.testing.assert_allclose(g, expected, rtol=1e-13, atol=1e-18)
+
+
+def third_body_position(t, a, n, e, i, node, w, M0):
+    """Textbook Kepler orbit: E by Newton, then R₃(node) R₁(i) R₃(ω) (a(cos E − e), b sin E)."""
+    M = M0 + n * t
+    E = M
+    for _ in range(50):
+        E -= (E - e * np.sin(E) - M) / (1 - e * np.cos(E))
+    p = np.array([a * (np.cos(E) - e), a * np.sqrt(1 - e * e) * np.sin(E), 0.0])
+
+    def rz(x):
+        return np.array([[np.cos(x), -np.sin(x), 0], [np.sin(x), np.cos(x), 0], [0, 0, 1]])
+
+    rx = np.array([[1, 0, 0], [0, np.cos(i), -np.sin(i)], [0, np.sin(i), np.cos(i)]])
+    return rz(node) @ rx @ rz(w) @ p
+
+
+@pytest.mark.parametrize("e", ["0", "0.3"])
+def test_third_body_direct_plus_indirect_part(e):
+    orbit = {"a": "3.5", "n": "0.15", "inclination": "0.4", "node": "-0.3"}
+    orbit |= {"argument_of_pericentre": "0.7", "mean_anomaly0": "2.0", "eccentricity": e}
+    term = ThirdBody.parse({"gm": "0.005", **orbit}, "third_body")
+    t = 7.5
+    x3 = third_body_position(
+        t,
+        *(float(orbit[k]) for k in ("a", "n", "eccentricity")),
+        *(
+            float(orbit[k])
+            for k in ("inclination", "node", "argument_of_pericentre", "mean_anomaly0")
+        ),
+    )
+    got = evaluate(term, t=t, with_gradient=True)
+    for p, row in zip(X, got, strict=True):
+        d = x3 - p
+        omega = 0.005 * (1 / np.linalg.norm(d) - p @ x3 / np.linalg.norm(x3) ** 3)
+        grad = 0.005 * (d / np.linalg.norm(d) ** 3 - x3 / np.linalg.norm(x3) ** 3)
+        np.testing.assert_allclose(row[0], omega, rtol=1e-13)
+        np.testing.assert_allclose(row[1:], grad, rtol=1e-12, atol=1e-17)
+
+
+def test_third_body_legendre_series_converges_to_the_exact_function():
+    """Σ_{l=2..N}: the remainder falls like (r/r₃)^(N+1) (here r/r₃ ≤ 0.53).
+
+    The series leaves out l = 0, the constant Gm₃/r₃ (no force); l = 1 cancels the indirect part.
+    """
+    body = {"gm": "0.005", "a": "3.5", "n": "0.15", "inclination": "0.4", "node": "-0.3"}
+    exact = evaluate(ThirdBody.parse(body, "tb"), t=1.0)[:, 0] - 0.005 / 3.5
+    previous = np.inf
+    for degree in (2, 4, 8, 16):
+        series = evaluate(ThirdBody.parse({**body, "degree": degree}, "tb"), t=1.0)[:, 0]
+        error = np.max(np.abs(series - exact))
+        assert error < 0.005 / 3.5 * 0.53 ** (degree + 1) / (1 - 0.53)  # |Pₗ| ≤ 1
+        assert error < previous
+        previous = error
