@@ -44,6 +44,7 @@ for _p in (str(ROOT), str(HERE)):
     if _p not in sys.path:
         sys.path.insert(0, _p)
 
+from report_sections import write_section  # noqa: E402
 from rotation_cases import (  # noqa: E402
     BY_NAME,
     CASES,
@@ -1085,8 +1086,7 @@ def write_report(
         lines += case_section(name, [j for j in jobs if j["case"] == name], f"rotation_{name}.png")
     lines += closed
     lines += ["## What we learned", "", *learned(jobs, ensembles, diagnostic, closed), ""]
-    path = out / "REPORT.md"
-    path.write_text("\n".join(lines))
+    path = write_section(out / "REPORT.md", "rotation", "\n".join(lines))
     return path
 
 

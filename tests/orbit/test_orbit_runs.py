@@ -24,6 +24,8 @@ from __future__ import annotations
 import copy
 import math
 import re
+import sys
+from pathlib import Path
 
 import mpmath
 import numpy as np
@@ -32,164 +34,21 @@ import pytest
 from cayley_heyoka import IntegrationError, Scene, load_result, run
 from cayley_heyoka.families import FAMILIES
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
+import orbit_cases  # noqa: E402
+
 EPS = 2.0**-52
 FORMULATIONS = ("cayley", "quaternion", "cartesian")
 POSITION, VELOCITY = ("x", "y", "z"), ("vx", "vy", "vz")
 SLOW = ("h", "Theta", "Sigma", "Phi")
 
 # --------------------------------------------------------------------- the reference cases
-# Inputs of cayley1860_reference_values.md, R1–R4. The third body's x₃ = a₃R₃(Ω₃)R₁(i₃)(cos λ₃,
-# sin λ₃, 0) with λ₃ = n₃t + λ₃,₀ is our circular orbit with node = Ω₃, inclination = i₃,
-# argument_of_pericentre = 0 and mean_anomaly0 = λ₃,₀.
-CASES = {
-    "R1": {
-        "orbit": {
-            "mu": "1",
-            "position": ["0.9", "0.2", "0.1"],
-            "velocity": ["-0.25", "0.85", "0.45"],
-            "sigma0": "0",
-        },
-        "perturbations": {"zonal": {"J2": "0.0010826", "radius": "0.8", "axis": ["0", "0", "1"]}},
-    },
-    "R2": {
-        "orbit": {
-            "mu": "1",
-            "position": ["1.0", "0.0", "0.0"],
-            "velocity": ["0.0", "0.9", "0.35"],
-            "sigma0": "0.5",
-        },
-        "perturbations": {
-            "third_body": {
-                "gm": "0.01",
-                "a": "4",
-                "n": "0.125",
-                "inclination": "0.2",
-                "node": "0.5",
-                "argument_of_pericentre": "0",
-                "mean_anomaly0": "0.3",
-            }
-        },
-    },
-    "R3": {
-        "orbit": {
-            "mu": "1",
-            "position": ["0.5", "-0.8", "0.3"],
-            "velocity": ["0.9", "0.45", "0.2"],
-            "sigma0": "0.7",
-        },
-        "perturbations": {
-            "zonal": {"J2": "0.001", "radius": "0.6", "axis": ["0.1", "-0.2", "1"]},
-            "third_body": {
-                "gm": "0.001",
-                "a": "3",
-                "n": "0.2",
-                "inclination": "0.3",
-                "node": "0.2",
-                "argument_of_pericentre": "0",
-                "mean_anomaly0": "1.0",
-            },
-        },
-        "reference_plane": {
-            "theta0": "0.3",
-            "theta_rate": "0.002",
-            "phi0": "0.2",
-            "phi_rate": "0.001",
-            "sigma0": "0.1",
-        },
-    },
-    "R4": {
-        "orbit": {
-            "mu": "1",
-            "position": ["0.6", "0.3", "-0.2"],
-            "velocity": ["0.2", "-1.35", "-0.6"],
-            "sigma0": "-1.0",
-        },
-        "perturbations": {"zonal": {"J2": "0.002", "radius": "0.5", "axis": ["0", "0", "1"]}},
-        "reference_plane": {
-            "theta0": "-0.5",
-            "theta_rate": "0.01",
-            "phi0": "0.4",
-            "phi_rate": "0",
-            "sigma0": "0.25",
-        },
-    },
-}
-
-# The state at time t, to 20 significant digits.
-REFERENCE = {
-    "R1": (
-        "50",
-        {
-            "r": "0.91754381238570604346",
-            "rdot": "-0.044431014285083049911",
-            "rho": "63.506274576114734312",
-            "h": "0.92138573223351558618",
-            "Theta": "-0.068781647446886413184",
-            "Sigma": "-0.071130813592626208822",
-            "Phi": "0.48529528100646901776",
-            "x": "0.71037710291908746397",
-            "y": "0.50293930986728166014",
-            "z": "0.29034990939520265054",
-            "vx": "-0.66915495340167687317",
-            "vy": "0.67352349558539207195",
-            "vz": "0.33009658283230273760",
-        },
-    ),
-    "R2": (
-        "80",
-        {
-            "r": "0.99803033444417985127",
-            "rdot": "-0.015289492490858408243",
-            "rho": "88.690120032842073207",
-            "h": "0.96562285812520598225",
-            "Theta": "-0.0051888935588595229872",
-            "Sigma": "0.49516300385363752105",
-            "Phi": "0.36992332943352065185",
-            "x": "0.97275538031796457047",
-            "y": "0.20742124951939164451",
-            "z": "0.082388978516715845238",
-            "vx": "-0.23125864697784773964",
-            "vy": "0.87620734400274891923",
-            "vz": "0.33930137453799927162",
-        },
-    ),
-    "R3": (
-        "100",
-        {
-            "r": "1.1301518064558511140",
-            "rdot": "0.10898644939439616932",
-            "rho": "97.269116015122398418",
-            "h": "1.0045791502895634261",
-            "Theta": "-2.5807071222033200875",
-            "Sigma": "0.67913581658894126537",
-            "Phi": "0.62137023908715296683",
-            "x": "1.0821190824467400077",
-            "y": "-0.032945599128392473248",
-            "z": "0.32430847127098040504",
-            "vx": "0.17627597749570660164",
-            "vy": "0.86978279904390681766",
-            "vz": "-0.12002415719870077010",
-        },
-    ),
-    "R4": (
-        "60",
-        {
-            "r": "1.6621013544153836037",
-            "rdot": "-0.42811875027560051125",
-            "rho": "26.734766236741659692",
-            "h": "1.0303586184490513178",
-            "Theta": "-0.74245757757382385981",
-            "Sigma": "-1.1231934843083595875",
-            "Phi": "2.7196181337340400024",
-            "x": "-0.77644773585945291321",
-            "y": "1.2064168093140621778",
-            "z": "0.83920695184957780082",
-            "vx": "0.67475048133955693799",
-            "vy": "0.072084281574021233977",
-            "vz": "-0.32725176972196370304",
-        },
-    ),
-}
+# R1–R4 of cayley1860_reference_values.md, shared with the validation report
+# (validation/orbit_cases.py): inputs, and the state at time t to 20 significant digits. The
+# notes' third body x₃ = a₃R₃(Ω₃)R₁(i₃)(cos λ₃, sin λ₃, 0), λ₃ = n₃t + λ₃,₀, is a circular orbit
+# with node = Ω₃, inclination = i₃, argument_of_pericentre = 0 and mean_anomaly0 = λ₃,₀.
+CASES = {c.name: c.scene for c in orbit_cases.REFERENCE}
+REFERENCE = {c.name: (c.t, c.values) for c in orbit_cases.REFERENCE}
 
 
 def orbit_scene(
