@@ -77,14 +77,20 @@ class Context:
         return self.pars.values[self.pars.index("mu")]
 
 
-def legendre_homogeneous(n: int, s: Expr, r2: Expr) -> Expr:
-    """``rⁿ Pₙ(s/r)`` as a polynomial in s and r² (Bonnet's recurrence; no division by r)."""
-    q_prev, q = hy.expression(1.0), s
+def legendre_scaled(n: int, s: Expr, r2: Expr) -> Expr:
+    """``n! rⁿ Pₙ(s/r)`` as a polynomial in s and r² with integer coefficients.
+
+    Bonnet's recurrence multiplied by k!: ``T₍ₖ₊₁₎ = (2k + 1) s Tₖ − k² r² T₍ₖ₋₁₎``. No division
+    by r, and no literal such as 1/3 that a double could not hold: in a quad or multiprecision
+    run every literal of the equations is a double, so the 1/n! goes into a parameter computed
+    in the run's precision instead.
+    """
+    t_prev, t = hy.expression(1.0), s
     if n == 0:
-        return q_prev
+        return t_prev
     for k in range(1, n):
-        q_prev, q = q, ((2 * k + 1) * s * q - k * r2 * q_prev) / (k + 1)
-    return q
+        t_prev, t = t, (2 * k + 1) * s * t - k * k * r2 * t_prev
+    return t
 
 
 @dataclass(frozen=True)
@@ -142,10 +148,12 @@ class Zonal:
         mu, R = ctx.exact(ctx.mu_value), ctx.exact(self.radius)
         terms = []
         for n, J in self.coefficients:
-            # −μ Jₙ Rⁿ as one parameter.
-            Cn = ctx.constant(f"zonal.C{n}", lambda n=n, J=J: -mu * ctx.exact(J) * R**n)
-            # Cₙ (rⁿ Pₙ(s/r)) / r²ⁿ⁺¹, with r²ⁿ⁺¹ as a power of r² (cheap in Taylor form).
-            terms.append(Cn * legendre_homogeneous(n, s, r2) * r2 ** (-(n + 0.5)))
+            # −μ Jₙ Rⁿ / n! as one parameter.
+            Cn = ctx.constant(
+                f"zonal.C{n}", lambda n=n, J=J: -mu * ctx.exact(J) * R**n / mpmath.factorial(n)
+            )
+            # Cₙ (n! rⁿ Pₙ(s/r)) / r²ⁿ⁺¹, with r²ⁿ⁺¹ as a power of r² (cheap in Taylor form).
+            terms.append(Cn * legendre_scaled(n, s, r2) * r2 ** (-(n + 0.5)))
         return _sum(terms)
 
 
@@ -280,23 +288,27 @@ class ThirdBody:
         return [centre[i] + aP[i] * c + bQ[i] * s for i in range(3)]
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
-        gm = ctx.pars.add("third_body.gm", self.gm)
         x3 = self.position(ctx)
         r3sq = frames.dot(x3, x3)
         if self.degree is None:
+            gm = ctx.pars.add("third_body.gm", self.gm)
             d = [x[i] - x3[i] for i in range(3)]
             direct = frames.dot(d, d) ** -0.5
             indirect = frames.dot(x, x3) * r3sq**-1.5
             return gm * (direct - indirect)
         # Legendre series of the direct part; l = 0 is constant in x, l = 1 cancels the
-        # indirect part: Ω = Gm₃ Σ_{l≥2} (r² ... ) with rˡ Pₗ(cos ψ) = polynomial in x·x₃/r₃, r².
+        # indirect part: Ω = Gm₃ Σ_{l≥2} rˡ Pₗ(cos ψ) / r₃ˡ⁺¹, cos ψ = x·x₃/(r r₃).
         r2 = frames.dot(x, x)
-        c = frames.dot(x, x3)
+        s = frames.dot(x, x3) * r3sq**-0.5
         terms = []
+        gm_value = ctx.exact(self.gm)
         for k in range(2, self.degree + 1):
-            # rˡ Pₗ(cos ψ) / r₃ˡ⁺¹ with cos ψ = c/(r r₃): Bonnet in s = c/r₃ and r².
-            terms.append(legendre_homogeneous(k, c * r3sq**-0.5, r2) * r3sq ** (-(k + 1) / 2))
-        return gm * _sum(terms)
+            ck = ctx.constant(
+                f"third_body.gm_over_factorial[{k}]",
+                lambda k=k: gm_value / mpmath.factorial(k),
+            )
+            terms.append(ck * legendre_scaled(k, s, r2) * r3sq ** (-(k + 1) / 2))
+        return _sum(terms)
 
 
 @dataclass(frozen=True)

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import heyoka as hy
+import mpmath
 import numpy as np
 import pytest
 from numpy.polynomial import legendre
 
 from cayley_heyoka.model import ParTable
 from cayley_heyoka.orbit.disturbing import Context, ThirdBody, Zonal, gradient
+from cayley_heyoka.precision import Precision
 
 MU = 1.3
 X = np.array([[0.9, 0.2, 0.1], [-0.3, 1.1, -0.6], [0.05, -0.4, 1.7]])
@@ -102,3 +104,45 @@ def test_third_body_legendre_series_converges_to_the_exact_function():
         assert error < 0.005 / 3.5 * 0.53 ** (degree + 1) / (1 - 0.53)  # |Pₗ| ≤ 1
         assert error < previous
         previous = error
+
+
+def test_zonal_and_series_carry_no_double_constant_into_quad():
+    """In real128 the J_n terms and the perturber's series agree with mpmath to ~1e-32.
+
+    Every literal of heyoka's equations is a double: a coefficient like 1/3 in the Legendre
+    recurrence would cap a quad run at ~1e-17 relative. Reference: mpmath's Legendre functions
+    at 40 digits.
+    """
+    prec = Precision("quad")
+    point = ["0.9", "0.2", "-0.35"]
+    pars = ParTable()
+    mu = pars.add("mu", "1.3")
+    x = list(hy.make_vars("x", "y", "z"))
+    coefficients = ((2, "1.0826e-3"), (3, "-2.5e-6"), (5, "-2.3e-7"), (7, "3e-7"))
+    zonal = Zonal(coefficients, "0.8", ("0.1", "-0.2", "1"))
+    body = ThirdBody.parse({"gm": "0.005", "a": "3.5", "n": "0", "degree": 9}, "tb")
+    ctx = Context(mu, pars, dps=50)
+    exprs = [zonal.omega(x, ctx), body.omega(x, ctx)]
+    cf = hy.cfunc(exprs, x, fp_type=hy.real128)
+    got = cf(prec.array(point), pars=prec.array(pars.values), time=prec.number(0))
+    with mpmath.workdps(40):
+        p = [mpmath.mpf(c) for c in point]
+        r = mpmath.norm(p)
+        k = [mpmath.mpf(c) for c in ("0.1", "-0.2", "1")]
+        cos_k = sum(a * b for a, b in zip(k, p, strict=True)) / (r * mpmath.norm(k))
+        expected_zonal = sum(
+            -mpmath.mpf("1.3")
+            * mpmath.mpf(J)
+            * mpmath.mpf("0.8") ** n
+            * mpmath.legendre(n, cos_k)
+            / r ** (n + 1)
+            for n, J in coefficients
+        )
+        r3 = mpmath.mpf("3.5")  # at t = 0 with node = 0, i = 0: x₃ = (a, 0, 0)
+        cos_3 = p[0] / r
+        expected_series = sum(
+            mpmath.mpf("0.005") / r3 * (r / r3) ** l * mpmath.legendre(l, cos_3)
+            for l in range(2, 10)
+        )
+        for value, expected in zip(got, (expected_zonal, expected_series), strict=True):
+            assert abs(mpmath.mpf(str(value)) / expected - 1) < 1e-31
