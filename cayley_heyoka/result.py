@@ -137,7 +137,7 @@ class Result:
 
     # ------------------------------------------------------------------ HDF5
     def save(self, path: str | Path) -> None:
-        """Write the result to an HDF5 file (see ``docs/results.md`` for the layout)."""
+        """Write the result to an HDF5 file (layout: ``docs/scenes.md``, "Files")."""
         import h5py
 
         prec = self.precision

@@ -171,7 +171,11 @@ class ThirdBody:
     mean_anomaly0: Number = 0
     mean_longitude0: Number | None = None
     degree: int | None = None
-    time_dependent = True
+
+    @property
+    def time_dependent(self) -> bool:
+        """A perturber at rest (n = 0) makes a static field, which conserves the energy."""
+        return exact_fraction(self.n) != 0
 
     @classmethod
     def parse(cls, table: Mapping[str, Any], where: str) -> ThirdBody:
@@ -313,7 +317,7 @@ class ThirdBody:
 
 @dataclass(frozen=True)
 class UserPotential:
-    """A disturbing function written as text over ``x, y, z, r, t``."""
+    """A disturbing function written as text over ``x, y, z, r, t`` (and ``mu``, ``pi``)."""
 
     text: str
     time_dependent: bool = False
@@ -322,7 +326,7 @@ class UserPotential:
     def parse(cls, table: Mapping[str, Any], where: str) -> UserPotential:
         check_keys(table, ["Omega"], where)
         if "Omega" not in table:
-            raise SceneError(f"{where}.Omega", "is required: Ω as text over x, y, z, r, t")
+            raise SceneError(f"{where}.Omega", "is required: Ω as text over x, y, z, r, t, mu")
         text = table["Omega"]
         try:
             used = names_used(text) if isinstance(text, str) else set()

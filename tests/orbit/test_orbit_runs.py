@@ -208,6 +208,7 @@ ECCENTRIC = {**CIRCULAR, "eccentricity": "0.2"}
         ({"zonal": ZONAL}, CASES["R4"]["reference_plane"], {"energy", "polar_momentum"}),
         ({"third_body": CIRCULAR}, None, {"jacobi"}),
         ({"third_body": ECCENTRIC}, None, set()),
+        ({"third_body": {**CIRCULAR, "n": "0"}}, None, {"energy", "jacobi"}),  # at rest
         ({"zonal": ZONAL, "third_body": CIRCULAR}, None, set()),
         ({"potential": {"Omega": "0.001 * x * y / r**5"}}, None, {"energy"}),
         ({"potential": {"Omega": "0.001 * cos(t) * z / r**3"}}, None, set()),
