@@ -119,3 +119,19 @@ def test_inclination_1e_8_within_the_law():
     for f, run in job["runs"].items():
         assert max(run["ratio"].values()) <= 1, (f, run["ratio"])
         assert run["max"]["position"] < 1e-11
+
+
+def test_passage_of_the_reference_plane_within_the_laws():
+    """validation/orbit_passage.py at δ = 1e-6: position and angles within their laws against
+    the closed form, and the Cayley stop where sin Φ = 1e-3 exactly (to 1e-12 in t: the event
+    is located on the step's Taylor polynomial to round-off)."""
+    import orbit_passage
+
+    rows = orbit_passage.measure("1e-6")
+    judged = [r for r in rows if "ratio" in r]
+    assert {r["formulation"] for r in judged} == {"cayley", "quaternion"}
+    assert all(r["ratio"] <= 1 for r in judged), judged
+    # The angles do lose accuracy like ε/δ (here ~1e-10): the point of the stop.
+    assert all(r["dTheta"] > 1e-12 for r in judged)
+    stop = next(r for r in rows if "stop" in r)
+    assert stop["stop"] is not None and orbit_passage.stop_error(stop) < 1e-12
