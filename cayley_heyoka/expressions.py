@@ -119,6 +119,17 @@ def names_used(text: str) -> set[str]:
     return {inv.get(n.id, n.id) for n in ast.walk(tree) if isinstance(n, ast.Name)}
 
 
+def uses_time(text: object) -> bool:
+    """Whether an expression text names ``t``; a malformed one is reported later, when it is
+    parsed with its field's name, so here it counts as not using it."""
+    if not isinstance(text, str):
+        return False
+    try:
+        return "t" in names_used(text)
+    except (SyntaxError, SceneError):
+        return False
+
+
 def _rename_keywords(text: str, field: str) -> str:
     try:
         tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))

@@ -36,7 +36,7 @@ import heyoka as hy
 import mpmath
 
 from ..errors import SceneError
-from ..expressions import names_used, parse_expression
+from ..expressions import parse_expression, uses_time
 from ..model import ParTable
 from ..precision import Number, exact_fraction
 from ..scene import check_keys, number, vector
@@ -327,12 +327,7 @@ class UserPotential:
         check_keys(table, ["Omega"], where)
         if "Omega" not in table:
             raise SceneError(f"{where}.Omega", "is required: Ω as text over x, y, z, r, t, mu")
-        text = table["Omega"]
-        try:
-            used = names_used(text) if isinstance(text, str) else set()
-        except SyntaxError:
-            used = set()  # parse_expression reports it, naming the field
-        return cls(text, "t" in used)
+        return cls(table["Omega"], uses_time(table["Omega"]))
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         symbols = dict(zip("xyz", x, strict=True))

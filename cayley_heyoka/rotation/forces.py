@@ -15,7 +15,7 @@ from typing import Any
 import heyoka as hy
 
 from ..errors import SceneError
-from ..expressions import names_used, parse_expression
+from ..expressions import parse_expression, uses_time
 from ..model import ParTable
 from ..scene import check_keys, number, unit_vector, vector
 from .attitude import Matrix
@@ -125,12 +125,7 @@ class Potential:
         check_keys(table, ["V"], where)
         if "V" not in table:
             raise SceneError(f"{where}.V", "is required")
-        text = table["V"]
-        try:
-            used = names_used(text) if isinstance(text, str) else set()
-        except SyntaxError:
-            used = set()  # parse_expression reports it with the field name
-        return cls(text, "t" in used)
+        return cls(table["V"], uses_time(table["V"]))
 
     def potential(self, ctx: ForceContext) -> Expr:
         symbols = {f"R{i + 1}{j + 1}": ctx.R[i][j] for i in range(3) for j in range(3)}
