@@ -20,6 +20,7 @@ class Family:
     parse: Callable[[Mapping[str, Any]], Any]
     build: Callable[[Any], Any]
     check: Callable[[Any], None] | None = None
+    output_keys: tuple[str, ...] = ()
 
 
 def _rotation() -> Family:
@@ -39,7 +40,22 @@ def _orbit() -> Family:
     return Family("orbit", "orbit", tables, Orbit.parse, build_model, check)
 
 
-FAMILIES: dict[str, Family] = {f.name: f for f in (_rotation(), _orbit())}
+def _hamiltonian() -> Family:
+    from .hamilton.model import build_model
+    from .hamilton.scene import Hamiltonian
+
+    tables = ("hamiltonian", "initial")
+    return Family(
+        "hamiltonian",
+        "hamiltonian",
+        tables,
+        Hamiltonian.parse,
+        build_model,
+        output_keys=("principal_function",),
+    )
+
+
+FAMILIES: dict[str, Family] = {f.name: f for f in (_rotation(), _orbit(), _hamiltonian())}
 
 
 def family_of(data: Mapping[str, Any]) -> str:

@@ -128,10 +128,13 @@ class OutputOptions:
     grid: tuple[Number, Number, int] | None = None
     events: tuple[str, ...] = ()
     monitors: tuple[str, ...] | None = None
+    options: Mapping[str, Any] = field(default_factory=dict)
 
     @classmethod
-    def parse(cls, table: Mapping[str, Any]) -> OutputOptions:
-        check_keys(table, ["times", "events", "monitors"], "output")
+    def parse(cls, table: Mapping[str, Any], family_keys: Iterable[str] = ()) -> OutputOptions:
+        """``family_keys``: output keys a model family adds (kept in :attr:`options`)."""
+        family_keys = tuple(family_keys)
+        check_keys(table, ["times", "events", "monitors", *family_keys], "output")
         if "times" not in table:
             raise SceneError("output.times", "is required ({start, stop, count} or a list)")
         times, grid = _parse_times(table["times"])
@@ -143,7 +146,10 @@ class OutputOptions:
             not isinstance(monitors, list) or not all(isinstance(m, str) for m in monitors)
         ):
             raise SceneError("output.monitors", f"must be a list of names, got {monitors!r}")
-        return cls(times, grid, tuple(events), None if monitors is None else tuple(monitors))
+        options = {k: table[k] for k in family_keys if k in table}
+        return cls(
+            times, grid, tuple(events), None if monitors is None else tuple(monitors), options
+        )
 
     def time_grid(self, precision: Precision) -> np.ndarray:
         """The output times in the target precision (a grid is built there, not in double)."""
@@ -244,7 +250,7 @@ class Scene:
         if not isinstance(title, str):
             raise SceneError("title", f"must be a string, got {title!r}")
         integrator = IntegratorOptions.parse(data.get("integrator", {}))
-        output = OutputOptions.parse(data.get("output", {}))
+        output = OutputOptions.parse(data.get("output", {}), spec.output_keys)
         events_table = data.get("events", {})
         if not isinstance(events_table, Mapping):
             raise SceneError("events", "must be a table of [events.NAME] tables")

@@ -1,0 +1,2 @@
+"""Hamilton's Second Essay on a General Method in Dynamics (1835): canonical systems from a
+Hamiltonian, the principal function, and his worked examples."""
