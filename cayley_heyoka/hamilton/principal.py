@@ -1,0 +1,136 @@
+"""Checking Hamilton's principal function on a run, through the variational equations.
+
+S(η, e, t) = ∫₀ᵗ (T + U) dt is a function of the final coordinates η, the initial coordinates e
+and the time (notes ``hamilton1835.md`` §1.2). Its partial derivatives satisfy
+
+    ∂S/∂η = ϖ,        ∂S/∂e = −p,        ∂S/∂t = −H.
+
+A run gives S as a function of the initial data (e, p) instead. heyoka's first-order
+variational equations (``var_ode_sys``) carry the Jacobians ∂η/∂e, ∂η/∂p, ∂S/∂e, ∂S/∂p along
+the run, and the chain rule turns them into the partials of S(η, e, t):
+
+    ∂S/∂η = (∂S/∂p) (∂η/∂p)⁻¹,
+    ∂S/∂e = ∂S/∂e|ₚ − (∂S/∂η) (∂η/∂e),
+    ∂S/∂t = Ṡ − (∂S/∂η) η̇.
+
+The three residuals against ϖ, −p and −H are what :func:`check_principal_function` returns.
+Where ∂η/∂p is singular (t = t₀, and conjugate points such as sin μt = 0 for the projectile)
+S(η, e, t) does not exist; those times are reported with an infinite condition number.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import heyoka as hy
+import mpmath
+import numpy as np
+
+from ..families import FAMILIES
+from ..precision import Precision
+from ..scene import Scene
+
+
+@dataclass(frozen=True)
+class PrincipalCheck:
+    """Residuals of the principal function's partial derivatives on the output grid.
+
+    Attributes
+    ----------
+    t
+        Output times (the run's precision).
+    eta, e, time
+        max |∂S/∂η − ϖ|, max |∂S/∂e + p| and |∂S/∂t + H| at each time (floats; NaN where
+        ∂η/∂p is singular).
+    condition
+        Condition number of ∂η/∂p at each time (∞ at t₀ and at conjugate points).
+    """
+
+    t: np.ndarray
+    eta: np.ndarray
+    e: np.ndarray
+    time: np.ndarray
+    condition: np.ndarray
+
+
+def check_principal_function(scene: Scene) -> PrincipalCheck:
+    """Integrate a Hamiltonian scene with its variational equations and check ∂S.
+
+    Parameters
+    ----------
+    scene
+        A scene of the ``hamiltonian`` family (``output.principal_function`` is implied).
+
+    Returns
+    -------
+    PrincipalCheck
+    """
+    if scene.family != "hamiltonian":
+        raise ValueError(f"scene: needs the hamiltonian family, got {scene.family!r}")
+    data = scene.to_dict()
+    data.setdefault("output", {})["principal_function"] = True
+    scene = Scene.from_dict(data)
+    model = FAMILIES["hamiltonian"].build(scene)
+    prec = scene.integrator.precision
+    n = scene.model.degrees
+    variational = hy.var_ode_sys(model.system, hy.var_args.vars, order=1)
+    kw = prec.heyoka_kwargs
+    extra = {}
+    if scene.integrator.tolerance is not None:
+        extra["tol"] = prec.number(scene.integrator.tolerance)
+    held = model.integrator_parameters()
+    ta = hy.taylor_adaptive(
+        variational,
+        prec.array(model.initial_state),
+        pars=prec.array(model.pars.values[:held]),
+        compact_mode=True,
+        high_accuracy=scene.integrator.high_accuracy,
+        **extra,
+        **kw,
+    )
+    grid = scene.output.time_grid(prec)
+    ta.time = grid[0]
+    rows = ta.propagate_grid(grid)[-1]
+    size = 2 * n + 1
+    jac = [ta.get_vslice(order=1, component=i) for i in range(size)]
+    rates = hy.cfunc([rhs for _, rhs in model.system], [v for v, _ in model.system], **kw)
+    energy = hy.cfunc([model.monitors["energy"]], [v for v, _ in model.system], **kw)
+    pars = prec.array(model.pars.values)
+    p0 = list(scene.model.varpi)
+    results = [
+        _residuals(row, jac, n, rates, energy, pars, t, prec, p0)
+        for row, t in zip(rows, grid[: len(rows)], strict=True)
+    ]
+    columns = np.array(results, dtype=float).T if results else np.empty((4, 0))
+    return PrincipalCheck(grid[: len(rows)], *columns)
+
+
+def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
+    state = copy.copy(row[: 2 * n + 1])
+    J = [[row[k] for k in range(s.start, s.stop)] for s in jac]
+    with mpmath.workdps(prec.dps + 5):
+        to_mp = (lambda v: mpmath.mpf(float(v))) if prec.kind == "double" else _mpf
+        A = mpmath.matrix([[to_mp(J[i][n + j]) for j in range(n)] for i in range(n)])  # ∂η/∂p
+        B = mpmath.matrix([[to_mp(J[i][j]) for j in range(n)] for i in range(n)])  # ∂η/∂e
+        sp = mpmath.matrix([to_mp(J[2 * n][n + j]) for j in range(n)])  # ∂S/∂p
+        se = mpmath.matrix([to_mp(J[2 * n][j]) for j in range(n)])  # ∂S/∂e
+        try:
+            condition = mpmath.cond(A)
+            y = mpmath.lu_solve(A.T, sp)  # ∂S/∂η
+        except ZeroDivisionError:
+            return [np.nan, np.nan, np.nan, np.inf]
+        varpi = [to_mp(state[n + i]) for i in range(n)]
+        d_eta = max(abs(y[i] - varpi[i]) for i in range(n))
+        d_e_vec = se - B.T * y
+        d_e = max(abs(d_e_vec[i] + _mpf(p0[i])) for i in range(n))
+        args = {"pars": pars, "time": t}
+        rhs = rates(state, **args)
+        H = to_mp(energy(state, **args)[0])
+        S_dot = to_mp(rhs[2 * n])
+        d_t = abs(S_dot - sum(y[i] * to_mp(rhs[i]) for i in range(n)) + H)
+        return [float(d_eta), float(d_e), float(d_t), float(condition)]
+
+
+def _mpf(value) -> mpmath.mpf:
+    return mpmath.mpf(str(value))
