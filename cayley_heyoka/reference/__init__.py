@@ -7,7 +7,8 @@ The stable entry point::
     s.p, s.q, s.r, s.phi, s.psi, s.nu0, s.lambda0, s.mu0, s.errors
 
 :class:`FreeRigidBody` evaluates many times and crossing times of the invariable plane;
-Euler's 1758 and Cayley's 1846 solutions are :class:`Euler1758` and :class:`Cayley1846`.
+Euler's 1758 and Cayley's 1846 solutions are :class:`Euler1758` and :class:`Cayley1846`;
+Hamilton's projectile is :func:`projectile_solution` (with :func:`principal_function`).
 Every value is computed at two working precisions and comes with the difference as its error
 estimate; a request that cannot be met raises :class:`PrecisionNotReached`.
 """
@@ -28,6 +29,10 @@ _HOMES = {
     "free_rigid_body": "..rotation.closed_form",
     "Euler1758": "..rotation.euler1758",
     "Cayley1846": "..rotation.cayley1846",
+    "projectile_solution": "..hamilton.projectile",
+    "principal_function": "..hamilton.projectile",
+    "ProjectileSolution": "..hamilton.projectile",
+    "PrincipalFunction": "..hamilton.projectile",
 }
 
 
@@ -44,5 +49,9 @@ __all__ = [
     "FreeBodyState",
     "FreeRigidBody",
     "PrecisionNotReached",
+    "PrincipalFunction",
+    "ProjectileSolution",
     "free_rigid_body",
+    "principal_function",
+    "projectile_solution",
 ]
