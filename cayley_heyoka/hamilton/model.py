@@ -4,7 +4,9 @@ The canonical equations come from H by heyoka's symbolic differentiation
 (:func:`.canonical.canonical_equations`); with ``output.principal_function = true`` the
 principal function S = ∫ (Σ ϖ η̇ − H) dt from the start time is one more state variable.
 Results carry ``eta1 … etaN``, ``varpi1 … varpiN`` (and ``S``); the monitor ``energy`` is H,
-conserved when H does not contain t.
+conserved when H does not contain t. With ``formulation = "elements"`` the state is Hamilton's
+varying elements ``chi1 … chiN``, ``lambda1 … lambdaN`` of the split H = H₁ + H₂
+(:mod:`.elements`), and η, ϖ are reported through the flow of H₁.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from fractions import Fraction
 from typing import Any
 
 import heyoka as hy
+import numpy as np
 
 from ..errors import SceneError
 from ..expressions import parse_expression
@@ -20,6 +23,7 @@ from ..model import EventSpec, Model, ParTable
 from ..precision import exact_fraction, fraction_text
 from ..scene import Scene
 from .canonical import canonical_equations, principal_rate
+from .elements import check_flow, compose, element_equations
 from .scene import Hamiltonian
 
 
@@ -31,20 +35,25 @@ def build_model(scene: Scene) -> Model:
     eta = [hy.make_vars(f"eta{i + 1}") for i in range(n)]
     varpi = [hy.make_vars(f"varpi{i + 1}") for i in range(n)]
     pars = ParTable()
-    if ham.model == "projectile":
-        H = _projectile(eta, varpi, ham, pars, prec)
+    H1, H2 = _split(ham, eta, varpi, pars, prec)
+    H = H1 if H2 is None else H1 + H2
+    if ham.formulation == "canonical":
+        system = canonical_equations(H, eta, varpi)
+        outputs = {str(v): v for v in (*eta, *varpi)}
+        energy, state_varpi = H, varpi
+        rate_of_S = None
     else:
-        symbols = {str(v): v for v in (*eta, *varpi)}
-        H = parse_expression(ham.text, symbols, pars, "hamiltonian.H")
-    system = canonical_equations(H, eta, varpi)
+        system, outputs, energy, rate_of_S = _elements(scene, ham, eta, varpi, H1, H2, pars, prec)
+        state_varpi = None
     initial: list[Any] = [*ham.eta, *ham.varpi]
-    outputs = {str(v): v for v in (*eta, *varpi)}
     if _principal_function(scene):
         S = hy.make_vars("S")
-        system.append((S, principal_rate(H, system, varpi)))
+        if rate_of_S is None:
+            rate_of_S = principal_rate(H, system, state_varpi)
+        system.append((S, rate_of_S))
         initial.append(0)
         outputs["S"] = S
-    monitors = {"energy": H}
+    monitors = {"energy": energy}
     conserved = () if ham.time_dependent else ("energy",)
     wanted = scene.output.monitors
     if wanted is not None:
@@ -68,8 +77,21 @@ def build_model(scene: Scene) -> Model:
     )
 
 
-def _projectile(eta, varpi, ham: Hamiltonian, pars: ParTable, prec) -> Any:
-    """H = ½|ϖ|² + g η₃ + ½{μ²(η₁² + η₂²) + ν² η₃²} (§5.1), with g, μ²/2, ν²/2 as parameters.
+def _split(ham: Hamiltonian, eta, varpi, pars: ParTable, prec) -> tuple[Any, Any]:
+    """(H₁, H₂) of the scene; H₂ is None for a single user Hamiltonian."""
+    symbols = {str(v): v for v in (*eta, *varpi)}
+    if ham.model == "projectile":
+        return _projectile(eta, varpi, ham, pars, prec)
+    if ham.text is not None:
+        return parse_expression(ham.text, symbols, pars, "hamiltonian.H"), None
+    H1 = parse_expression(ham.split[0], symbols, pars, "hamiltonian.H1")
+    H2 = parse_expression(ham.split[1], symbols, pars, "hamiltonian.H2")
+    return H1, H2
+
+
+def _projectile(eta, varpi, ham: Hamiltonian, pars: ParTable, prec) -> tuple[Any, Any]:
+    """H₁ = ½|ϖ|² + g η₃ (free fall) and H₂ = ½{μ²(η₁² + η₂²) + ν² η₃²} (§5.1, §6), with g,
+    μ²/2, ν²/2 as parameters.
 
     The squares are taken exactly from the scene's numbers and rounded once, so that no
     expression of parameters alone is left for heyoka to evaluate at every Taylor order.
@@ -81,8 +103,56 @@ def _projectile(eta, varpi, ham: Hamiltonian, pars: ParTable, prec) -> Any:
         return pars.add(f"projectile.{key}_squared_half", fraction_text(value, prec))
 
     mu2, nu2 = half_square("mu"), half_square("nu")
-    kinetic = 0.5 * hy.sum([p * p for p in varpi])
-    return kinetic + g * eta[2] + mu2 * (eta[0] * eta[0] + eta[1] * eta[1]) + nu2 * eta[2] ** 2
+    H1 = 0.5 * hy.sum([p * p for p in varpi]) + g * eta[2]
+    H2 = mu2 * (eta[0] * eta[0] + eta[1] * eta[1]) + nu2 * eta[2] ** 2
+    return H1, H2
+
+
+def _projectile_flow(chi, lam, pars: ParTable) -> tuple[list, list]:
+    """Free fall (149.): η₁,₂ = χ + λt, η₃ = χ₃ + λ₃t − ½gt², ϖ₁,₂ = λ, ϖ₃ = λ₃ − gt."""
+    g, t = hy.par[pars.index("projectile.g")], hy.time
+    flow_eta = [chi[0] + lam[0] * t, chi[1] + lam[1] * t, chi[2] + lam[2] * t - 0.5 * g * t * t]
+    flow_varpi = [lam[0], lam[1], lam[2] - g * t]
+    return flow_eta, flow_varpi
+
+
+def _elements(scene, ham: Hamiltonian, eta, varpi, H1, H2, pars: ParTable, prec):
+    """Hamilton's varying elements χ, λ of the split (:mod:`.elements`): the system, the
+    outputs (χ, λ and η, ϖ through the flow), H along the flow and dS/dt."""
+    start = scene.output.times[0] if scene.output.times is not None else scene.output.grid[0]
+    if exact_fraction(start) != 0:
+        raise SceneError(
+            "output.times",
+            "formulation = 'elements' starts at t = 0: its elements are the initial data there",
+        )
+    n = ham.degrees
+    chi = [hy.make_vars(f"chi{i + 1}") for i in range(n)]
+    lam = [hy.make_vars(f"lambda{i + 1}") for i in range(n)]
+    if ham.model == "projectile":
+        flow_eta, flow_varpi = _projectile_flow(chi, lam, pars)
+    else:
+        symbols = {str(v): v for v in (*chi, *lam)}
+        flow_eta = [
+            parse_expression(ham.flow[f"eta{i + 1}"], symbols, pars, f"hamiltonian.flow.eta{i + 1}")
+            for i in range(n)
+        ]
+        flow_varpi = [
+            parse_expression(
+                ham.flow[f"varpi{i + 1}"], symbols, pars, f"hamiltonian.flow.varpi{i + 1}"
+            )
+            for i in range(n)
+        ]
+    values = np.array([float(exact_fraction(v)) for v in pars.values])
+    check_flow(H1, eta, varpi, flow_eta, flow_varpi, chi, lam, values, "hamiltonian.flow")
+    system = element_equations(H2, eta, varpi, flow_eta, flow_varpi, chi, lam)
+    outputs = {str(v): v for v in (*chi, *lam)}
+    outputs |= {str(v): f for v, f in zip((*eta, *varpi), (*flow_eta, *flow_varpi), strict=True)}
+    H = H1 + H2
+    energy = compose(H, eta, varpi, flow_eta, flow_varpi)
+    # dS/dt = Σ ϖ η̇ − H on the true motion, η̇ = ∂H/∂ϖ at the state the flow gives.
+    eta_rates = [rhs for _, rhs in canonical_equations(H, eta, varpi)[:n]]
+    lagrangian = hy.sum([p * r for p, r in zip(varpi, eta_rates, strict=True)]) - H
+    return system, outputs, energy, compose(lagrangian, eta, varpi, flow_eta, flow_varpi)
 
 
 def _principal_function(scene: Scene) -> bool:

@@ -159,7 +159,7 @@ def test_only_what_is_asked_is_integrated():
         (
             {"hamiltonian": {"model": "projectile", "H": "varpi1**2", "g": 1}},
             "hamiltonian",
-            "either",
+            "one of",
         ),
         ({"hamiltonian": {"model": "kepler"}}, "hamiltonian.model", "one of"),
         (
