@@ -8,6 +8,10 @@
 
 from __future__ import annotations
 
+import copy
+import sys
+from pathlib import Path
+
 import heyoka as hy
 import numpy as np
 import pytest
@@ -19,35 +23,21 @@ from cayley_heyoka.orbit import frames
 from cayley_heyoka.orbit.disturbing import Context, disturbing_function
 from cayley_heyoka.orbit.model import CAYLEY
 
-R3 = {
-    "orbit": {
-        "mu": "1",
-        "position": ["0.5", "-0.8", "0.3"],
-        "velocity": ["0.9", "0.45", "0.2"],
-        "sigma0": "0.7",
-    },
-    "perturbations": {
-        "zonal": {"J2": "0.001", "J3": "-0.0004", "radius": "0.6", "axis": ["0.1", "-0.2", "1"]},
-        "third_body": {
-            "gm": "0.001",
-            "a": "3",
-            "n": "0.2",
-            "inclination": "0.3",
-            "node": "0.2",
-            "mean_anomaly0": "1",
-            "eccentricity": "0.2",
-            "argument_of_pericentre": "0.4",
-        },
-    },
-    "reference_plane": {
-        "theta0": "0.3",
-        "theta_rate": "0.002",
-        "phi0": "0.2",
-        "phi_rate": "0.001",
-        "sigma0": "0.1",
-    },
-    "output": {"times": [0, 1]},
-}
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
+import orbit_cases  # noqa: E402
+
+
+def _r3_extended() -> dict:
+    """Reference case R3 (validation/orbit_cases.py) with more terms switched on: J3 beside J2
+    and an eccentric perturber with a pericentre argument, so every Ω branch is exercised."""
+    d = copy.deepcopy(next(c for c in orbit_cases.REFERENCE if c.name == "R3").scene)
+    d["perturbations"]["zonal"]["J3"] = "-0.0004"
+    d["perturbations"]["third_body"] |= {"eccentricity": "0.2", "argument_of_pericentre": "0.4"}
+    d["output"] = {"times": [0, 1]}
+    return d
+
+
+R3 = _r3_extended()
 
 
 def build(scene_dict: dict, formulation: str):
