@@ -1,4 +1,4 @@
-"""The ``cayley-heyoka`` command: run scenes, summarise result files."""
+"""The ``cayley-heyoka`` command: run scenes, check them, summarise result files."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .checks import check_scene
 from .engine import run
 from .errors import IntegrationError, SceneError
 from .result import Result
@@ -28,12 +29,33 @@ def main(argv: list[str] | None = None) -> int:
     bar.add_argument("--no-progress", dest="progress", action="store_false")
     p_info = sub.add_parser("info", help="summarise a result file")
     p_info.add_argument("result", type=Path)
+    p_check = sub.add_parser(
+        "check", help="check a scene against an independent computation (exit 1 if it fails)"
+    )
+    p_check.add_argument("scene", type=Path, help="scene TOML file")
+    p_check.add_argument("--out", type=Path, help="write the check's rows and series to HDF5")
     args = parser.parse_args(argv)
 
     if args.command == "info":
         print(summary(Result.load(args.result)))
         return 0
+    if args.command == "check":
+        return _check(args)
     return _run(args)
+
+
+def _check(args: argparse.Namespace) -> int:
+    try:
+        report = check_scene(load_scene(args.scene))
+    except SceneError as exc:
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
+    if args.out:
+        report.save(args.out)
+    print(report.text())
+    if args.out:
+        print(f"check written to {args.out}")
+    return 0 if report.passed else 1
 
 
 def _run(args: argparse.Namespace) -> int:

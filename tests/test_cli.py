@@ -100,3 +100,44 @@ def test_orbit_example_in_the_other_formulations(tmp_path, capsys, formulation):
     a, b = Result.load(out), Result.load(ref)
     for k in ("x", "y", "z"):
         assert abs(a[k][-1] - b[k][-1]) < 1e-11
+
+
+PENDULUM = """
+[hamiltonian]
+H = "varpi1**2/2 - cos(eta1)"
+[initial]
+eta = [0.3]
+varpi = [1.2]
+[output]
+times = { start = 0.0, stop = 6.0, count = 7 }
+"""
+
+
+def test_check_passes_and_writes_its_rows(tmp_path, capsys):
+    import h5py
+
+    scene = tmp_path / "pendulum.toml"
+    scene.write_text(PENDULUM)
+    out = tmp_path / "check.h5"
+    assert main(["check", str(scene), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "∂S/∂t + H" in text and "passed" in text
+    with h5py.File(out) as f:
+        assert f.attrs["passed"]
+        assert len(f["rows"]) == 3 and f["series/t"].shape == (7,)
+
+
+def test_check_fails_with_exit_1_when_S_is_wrong(tmp_path, capsys, monkeypatch):
+    import cayley_heyoka.hamilton.model as model
+
+    original = model.principal_rate
+    monkeypatch.setattr(model, "principal_rate", lambda H, s, v: original(H, s, v) + 1e-6)
+    scene = tmp_path / "pendulum.toml"
+    scene.write_text(PENDULUM)
+    assert main(["check", str(scene)]) == 1
+    assert "FAILED" in capsys.readouterr().out
+
+
+def test_check_refuses_a_scene_it_has_no_check_for(capsys):
+    assert main(["check", str(EXAMPLES / "free_body.toml")]) == 2
+    assert "no consistency check" in capsys.readouterr().err

@@ -27,6 +27,7 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..checks import CheckReport, CheckRow
 from ..families import FAMILIES
 from ..precision import Precision
 from ..scene import Scene
@@ -45,6 +46,10 @@ class PrincipalCheck:
         ∂η/∂p is singular).
     condition
         Condition number of ∂η/∂p at each time (∞ at t₀ and at conjugate points).
+    scale
+        Size of the compared quantities: the largest |ϖᵢ|, |pᵢ| and |H| on the run.
+    epsilon
+        Unit round-off of the run's precision.
     """
 
     t: np.ndarray
@@ -52,6 +57,32 @@ class PrincipalCheck:
     e: np.ndarray
     time: np.ndarray
     condition: np.ndarray
+    scale: float
+    epsilon: float
+
+    def report(self) -> CheckReport:
+        """The residuals as a :class:`~cayley_heyoka.checks.CheckReport`.
+
+        Each residual is a few roundings of quantities of size :attr:`scale`, amplified by the
+        condition of ∂η/∂p that the chain rule inverts; the bound is 64 ε · scale · cond,
+        written here as the residual divided by scale · cond against 64 ε. Times where S(η, e, t)
+        does not exist (∂η/∂p singular) are left out and counted in the note.
+        """
+        finite = np.isfinite(self.condition)
+        skipped = int(np.count_nonzero(~finite))
+        note = "÷ scale·cond(∂η/∂p)"
+        if skipped:
+            note += f"; {skipped} singular time(s) left out"
+        rows = []
+        series: dict[str, np.ndarray] = {"t": np.asarray(self.t, dtype=float)}
+        for name, label in (("eta", "∂S/∂η − ϖ"), ("e", "∂S/∂e + p"), ("time", "∂S/∂t + H")):
+            relative = getattr(self, name)[finite] / (self.scale * self.condition[finite])
+            error = float(np.max(relative)) if relative.size else float("nan")
+            rows.append(CheckRow(label, error, 64 * self.epsilon, note))
+            series[name] = getattr(self, name)
+        series["condition"] = self.condition
+        title = "Hamilton's principal function S: its partial derivatives through var_ode_sys"
+        return CheckReport(title, tuple(rows), series)
 
 
 def check_principal_function(scene: Scene) -> PrincipalCheck:
@@ -60,7 +91,8 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
     Parameters
     ----------
     scene
-        A scene of the ``hamiltonian`` family (``output.principal_function`` is implied).
+        A scene of the ``hamiltonian`` family (``output.principal_function`` is implied; a
+        scene with ``formulation = "elements"`` is checked in its canonical formulation).
 
     Returns
     -------
@@ -70,6 +102,8 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
         raise ValueError(f"scene: needs the hamiltonian family, got {scene.family!r}")
     data = scene.to_dict()
     data.setdefault("output", {})["principal_function"] = True
+    # The Jacobians are taken with respect to η(t₀), ϖ(t₀): the canonical state.
+    data["hamiltonian"]["formulation"] = "canonical"
     scene = Scene.from_dict(data)
     model = FAMILIES["hamiltonian"].build(scene)
     prec = scene.integrator.precision
@@ -102,8 +136,9 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
         _residuals(row, jac, n, rates, energy, pars, t, prec, p0)
         for row, t in zip(rows, grid[: len(rows)], strict=True)
     ]
-    columns = np.array(results, dtype=float).T if results else np.empty((4, 0))
-    return PrincipalCheck(grid[: len(rows)], *columns)
+    columns = np.array(results, dtype=float).T if results else np.empty((5, 0))
+    scale = max([float(np.max(columns[4], initial=0.0))] + [abs(float(v)) for v in p0])
+    return PrincipalCheck(grid[: len(rows)], *columns[:4], scale, prec.epsilon)
 
 
 def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
@@ -115,21 +150,22 @@ def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
         B = mpmath.matrix([[to_mp(J[i][j]) for j in range(n)] for i in range(n)])  # ∂η/∂e
         sp = mpmath.matrix([to_mp(J[2 * n][n + j]) for j in range(n)])  # ∂S/∂p
         se = mpmath.matrix([to_mp(J[2 * n][j]) for j in range(n)])  # ∂S/∂e
+        varpi = [to_mp(state[n + i]) for i in range(n)]
+        args = {"pars": pars, "time": t}
+        H = to_mp(energy(state, **args)[0])
+        size = float(max([abs(H)] + [abs(v) for v in varpi]))
         try:
             condition = mpmath.cond(A)
             y = mpmath.lu_solve(A.T, sp)  # ∂S/∂η
         except ZeroDivisionError:
-            return [np.nan, np.nan, np.nan, np.inf]
-        varpi = [to_mp(state[n + i]) for i in range(n)]
+            return [np.nan, np.nan, np.nan, np.inf, size]
         d_eta = max(abs(y[i] - varpi[i]) for i in range(n))
         d_e_vec = se - B.T * y
         d_e = max(abs(d_e_vec[i] + _mpf(p0[i])) for i in range(n))
-        args = {"pars": pars, "time": t}
         rhs = rates(state, **args)
-        H = to_mp(energy(state, **args)[0])
         S_dot = to_mp(rhs[2 * n])
         d_t = abs(S_dot - sum(y[i] * to_mp(rhs[i]) for i in range(n)) + H)
-        return [float(d_eta), float(d_e), float(d_t), float(condition)]
+        return [float(d_eta), float(d_e), float(d_t), float(condition), size]
 
 
 def _mpf(value) -> mpmath.mpf:
