@@ -131,7 +131,9 @@ class Precision:
         values = list(values)
         if self.kind == "double":
             return np.array([float(v) for v in values], dtype=float)
-        return np.array([self.number(v) for v in values])
+        # The dtype is explicit: an empty list would otherwise become float64, which heyoka's
+        # compiled functions refuse for real128 and real.
+        return np.array([self.number(v) for v in values], dtype=self.fp_type)
 
     def to_text(self, values: np.ndarray) -> np.ndarray:
         """Decimal strings that load back bit-for-bit with :meth:`from_text`."""
