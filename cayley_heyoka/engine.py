@@ -69,7 +69,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
     if compact is None:
         # MPFR code is large per operation: without compact mode even a small system takes
         # minutes to compile, while compact mode costs it little at run time.
-        compact = prec.kind == "real" or model.size() > COMPACT_THRESHOLD
+        compact = prec.kind == "real" or model.compact or model.size() > COMPACT_THRESHOLD
     kw = prec.heyoka_kwargs
     ev_kw = {"fp_type": kw["fp_type"]} if kw else {}
     nt_events = [

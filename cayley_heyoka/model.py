@@ -112,6 +112,10 @@ class Model:
         Monitors that the exact flow conserves for this scene.
     events, terminal
         Recorded and acting events.
+    compact
+        Compile in compact mode unless the scene says otherwise: the family knows that this
+        system's code is large for what it computes (heyoka's non-compact code grows with the
+        expression's size, and its compile time faster), where :meth:`size` would not tell.
     """
 
     family: str
@@ -123,6 +127,7 @@ class Model:
     conserved: tuple[str, ...] = ()
     events: list[EventSpec] = field(default_factory=list)
     terminal: list[TerminalSpec] = field(default_factory=list)
+    compact: bool = False
 
     @property
     def state_names(self) -> list[str]:
