@@ -30,6 +30,10 @@ from .scene import Hamiltonian
 def build_model(scene: Scene) -> Model:
     """Turn a validated Hamiltonian scene into a :class:`~cayley_heyoka.model.Model`."""
     ham: Hamiltonian = scene.model
+    if ham.model == "predominant_mass":
+        from .planets_model import build_model as build_predominant_mass
+
+        return build_predominant_mass(scene)
     prec = scene.integrator.precision
     n = ham.degrees
     eta = [hy.make_vars(f"eta{i + 1}") for i in range(n)]

@@ -155,8 +155,7 @@ def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
         sp = mpmath.matrix([to_mp(J[2 * n][n + j]) for j in range(n)])  # ∂S/∂p
         se = mpmath.matrix([to_mp(J[2 * n][j]) for j in range(n)])  # ∂S/∂e
         varpi = [to_mp(state[n + i]) for i in range(n)]
-        args = {"pars": pars, "time": t}
-        H = to_mp(energy(state, **args)[0])
+        H = to_mp(energy(state, pars=pars[: energy.nparams], time=t)[0])
         size = float(max([abs(H)] + [abs(v) for v in varpi]))
         try:
             inverse = mpmath.inverse(A)
@@ -166,7 +165,7 @@ def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
         d_eta = max(abs(y[i] - varpi[i]) for i in range(n))
         d_e_vec = se - B.T * y
         d_e = max(abs(d_e_vec[i] + _mpf(p0[i])) for i in range(n))
-        rhs = rates(state, **args)
+        rhs = rates(state, pars=pars[: rates.nparams], time=t)
         S_dot = to_mp(rhs[2 * n])
         d_t = abs(S_dot - sum(y[i] * to_mp(rhs[i]) for i in range(n)) + H)
         # Every Jacobian entry carries an error relative to the largest of them (heyoka controls

@@ -6,24 +6,41 @@
     over ``eta1 … etaN``, ``varpi1 … varpiN`` and ``t``, or a split ``H1``, ``H2`` with the
     motion of H₁ in ``[hamiltonian.flow]``. ``formulation = "elements"`` integrates Hamilton's
     varying elements of the split instead of η, ϖ.
+    ``model = "predominant_mass"`` with ``G``, ``central_mass`` and ``[[hamiltonian.bodies]]``
+    (each a ``mass`` and either ``elements`` or ``position`` and ``velocity``): Hamilton's
+    system with one predominant mass (§7–§8 of the notes; :mod:`.planets`), integrated in
+    canonical heliocentric coordinates or through Hamilton's elements of every body.
 ``[initial]``
     ``eta`` and ``varpi``: the coordinates and momenta at the start time (N each; N = 3 for
-    the projectile).
+    the projectile). Not used by the predominant mass, whose bodies carry their own state.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import mpmath
+
 from ..errors import SceneError
 from ..expressions import uses_time
-from ..precision import Number
+from ..orbit.elements import Elements
+from ..orbit.frames import cross, dot
+from ..orbit.scene import ELEMENT_KEYS
+from ..precision import Number, exact_fraction
 from ..scene import check_keys, number, vector
+from . import planets
 
-MODELS = ("projectile",)
+MODELS = ("projectile", "predominant_mass")
 _MAX_DEGREES = 60
+#: Bodies about the predominant mass: the element equations grow like N², and at N = 8 they
+#: still compile in compact mode in seconds (docs/hamilton.md).
+MAX_BODIES = 8
+_PLANET_KEYS = ("G", "central_mass", "bodies")
+#: Digits of the predominant mass's canonical starting state in :attr:`Hamiltonian.eta`.
+STATE_DIGITS = 100
 
 
 FORMULATIONS = ("canonical", "elements")
@@ -51,7 +68,12 @@ class Hamiltonian:
         ``"canonical"`` (η, ϖ by the canonical equations of H) or ``"elements"`` (Hamilton's
         varying elements χ, λ of the split, :mod:`.elements`).
     eta, varpi
-        Coordinates and momenta at the start time.
+        Coordinates and momenta at the start time. For the predominant mass: the canonical
+        heliocentric state, ξ of every body and pᵢ = mᵢx′ᵢ, as decimal text with
+        :data:`STATE_DIGITS` digits (the model computes its own in the run's precision).
+    bodies
+        The bodies about the predominant mass (``model = "predominant_mass"``, whose
+        :attr:`constants` are ``{"G", "central_mass"}``); empty otherwise.
     """
 
     model: str
@@ -62,29 +84,35 @@ class Hamiltonian:
     formulation: str
     eta: tuple[Number, ...]
     varpi: tuple[Number, ...]
+    bodies: tuple[Body, ...] = ()
 
     @classmethod
     def parse(cls, tables: Mapping[str, Any]) -> Hamiltonian:
         table = tables.get("hamiltonian", {})
-        keys = ["model", "H", "H1", "H2", "flow", "formulation", "g", "mu", "nu"]
+        keys = ["model", "H", "H1", "H2", "flow", "formulation", "g", "mu", "nu", *_PLANET_KEYS]
         check_keys(table, keys, "hamiltonian")
         given = [k for k in ("model", "H", "H1") if k in table]
         if len(given) != 1:
             raise SceneError(
                 "hamiltonian",
-                "give one of model = 'projectile', H = '<expression>' or H1 and H2 (a split "
-                f"with its flow); got {given or 'none'}",
+                f"give one of model = {' | '.join(repr(m) for m in MODELS)}, H = '<expression>' "
+                f"or H1 and H2 (a split with its flow); got {given or 'none'}",
             )
         formulation = table.get("formulation", "canonical")
         if formulation not in FORMULATIONS:
             raise SceneError(
                 "hamiltonian.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
             )
+        if table.get("model") == "predominant_mass":
+            return cls._predominant_mass(tables, formulation)
+        extra = [k for k in _PLANET_KEYS if k in table]
+        if extra:
+            raise SceneError(f"hamiltonian.{extra[0]}", "belongs to model = 'predominant_mass'")
+        model = table.get("model")
+        if model is not None and model not in MODELS:
+            raise SceneError("hamiltonian.model", f"must be one of {MODELS}, got {model!r}")
         eta, varpi = _initial(tables, 3 if "model" in table else None)
-        if "model" in table:
-            model = table["model"]
-            if model not in MODELS:
-                raise SceneError("hamiltonian.model", f"must be one of {MODELS}, got {model!r}")
+        if model is not None:
             for key in ("H2", "flow"):
                 if key in table:
                     raise SceneError(f"hamiltonian.{key}", "is built in for the projectile")
@@ -117,9 +145,35 @@ class Hamiltonian:
             )
         return cls("expression", {}, None, split, flow, formulation, eta, varpi)
 
+    @classmethod
+    def _predominant_mass(cls, tables: Mapping[str, Any], formulation: str) -> Hamiltonian:
+        table = tables["hamiltonian"]
+        for key in ("H2", "flow", "g", "mu", "nu"):
+            if key in table:
+                raise SceneError(
+                    f"hamiltonian.{key}", "is not used by model = 'predominant_mass' (built in)"
+                )
+        if "initial" in tables:
+            raise SceneError(
+                "initial",
+                "is not used by model = 'predominant_mass': each [[hamiltonian.bodies]] table "
+                "gives its body's mass and state at the start time",
+            )
+        constants = {}
+        for key, meaning in (("G", "the constant of gravitation"), ("central_mass", "M")):
+            if key not in table:
+                raise SceneError(
+                    f"hamiltonian.{key}", f"is required by model = 'predominant_mass' ({meaning})"
+                )
+            constants[key] = number(table[key], f"hamiltonian.{key}", positive=True)
+        bodies = tuple(_bodies(table.get("bodies"), formulation))
+        _check_bodies(bodies, formulation, constants["G"], constants["central_mass"])
+        eta, varpi = _canonical_state(bodies, constants["G"], constants["central_mass"])
+        return cls("predominant_mass", constants, None, None, None, formulation, eta, varpi, bodies)
+
     @property
     def degrees(self) -> int:
-        """Number of coordinates N."""
+        """Number of coordinates N (3 per body for the predominant mass)."""
         return len(self.eta)
 
     @property
@@ -172,3 +226,171 @@ def _length(value: Any, where: str) -> int:
     if not isinstance(value, list | tuple) or not 1 <= len(value) <= _MAX_DEGREES:
         raise SceneError(where, f"must be a list of 1 to {_MAX_DEGREES} numbers, got {value!r}")
     return len(value)
+
+
+# ---------------------------------------------------------------------- the predominant mass
+@dataclass(frozen=True)
+class Body:
+    """A body about the predominant mass, with its state at the start time.
+
+    Attributes
+    ----------
+    mass
+        m > 0.
+    elements
+        The classical elements ``a, e, inclination, node, argument_of_pericentre,
+        mean_anomaly`` of its relative orbit in Hamilton's meaning (Kepler orbit of ξ with
+        parameter G(M + m) and velocity (1 + m/M) x′, §8.3), or None.
+    position, velocity
+        ξ (relative to the predominant mass) and x′ (relative to the centre of gravity), or
+        None when :attr:`elements` are given.
+    """
+
+    mass: Number
+    elements: Mapping[str, Number] | None = None
+    position: tuple[Number, ...] | None = None
+    velocity: tuple[Number, ...] | None = None
+
+    def state(self, central_mass: Number, G: Number) -> tuple[list, list]:
+        """(ξ, x′) at the start time in mpmath, at the current precision."""
+        if self.elements is None:
+            return [_mpf(c) for c in self.position], [_mpf(c) for c in self.velocity]
+        values = Elements(**{k: _mpf(v) for k, v in self.elements.items()})
+        return planets.classical_state(values, _mpf(self.mass), _mpf(central_mass), _mpf(G))
+
+
+def _mpf(value: Number) -> mpmath.mpf:
+    f = exact_fraction(value)
+    return mpmath.mpf(f.numerator) / f.denominator
+
+
+def _bodies(value: Any, formulation: str) -> list[Body]:
+    where = "hamiltonian.bodies"
+    if value is None:
+        raise SceneError(
+            where,
+            "is required by model = 'predominant_mass': one [[hamiltonian.bodies]] table per "
+            "body, with its mass and elements (or position and velocity)",
+        )
+    if not isinstance(value, list | tuple) or not 1 <= len(value) <= MAX_BODIES:
+        raise SceneError(
+            where, f"must be an array of 1 to {MAX_BODIES} tables ([[hamiltonian.bodies]])"
+        )
+    return [_body(b, f"{where}[{i}]", formulation) for i, b in enumerate(value)]
+
+
+def _body(table: Any, where: str, formulation: str) -> Body:
+    check_keys(table, ["mass", "elements", "position", "velocity"], where)
+    if "mass" not in table:
+        raise SceneError(f"{where}.mass", "is required")
+    mass = number(table["mass"], f"{where}.mass", positive=True)
+    cartesian = [k for k in ("position", "velocity") if k in table]
+    if "elements" in table:
+        if cartesian:
+            raise SceneError(
+                where, f"give either elements or position and velocity, not both ({cartesian})"
+            )
+        return Body(mass, elements=_elements(table["elements"], f"{where}.elements", formulation))
+    if len(cartesian) != 2:
+        raise SceneError(where, "needs its state: elements = {a, e, …}, or position and velocity")
+    position = vector(table["position"], f"{where}.position", 3)
+    velocity = vector(table["velocity"], f"{where}.velocity", 3)
+    if all(exact_fraction(c) == 0 for c in position):
+        raise SceneError(f"{where}.position", "must not be the origin (the predominant mass)")
+    return Body(mass, position=position, velocity=velocity)
+
+
+def _elements(table: Any, where: str, formulation: str) -> dict[str, Number]:
+    check_keys(table, ELEMENT_KEYS, where)
+    missing = [k for k in ELEMENT_KEYS if k not in table]
+    if missing:
+        raise SceneError(where, f"missing {missing}")
+    values = {k: number(table[k], f"{where}.{k}") for k in ELEMENT_KEYS}
+    if exact_fraction(values["a"]) <= 0:
+        raise SceneError(f"{where}.a", f"must be > 0, got {values['a']}")
+    e = exact_fraction(values["e"])
+    if not 0 <= e < 1:
+        raise SceneError(
+            f"{where}.e",
+            f"must be in [0, 1), got {values['e']}: Hamilton's bodies are bound to the "
+            "predominant mass (give another orbit by position and velocity, with formulation = "
+            "'canonical')",
+        )
+    inclination = exact_fraction(values["inclination"])
+    if not 0 <= inclination <= math.pi:
+        raise SceneError(f"{where}.inclination", f"must be in [0, π], got {values['inclination']}")
+    if formulation == "elements":
+        if e == 0:
+            raise SceneError(f"{where}.e", "must be > 0 " + _CIRCULAR)
+        if inclination == 0:
+            raise SceneError(f"{where}.inclination", "must not be 0 " + _PLANAR)
+    return values
+
+
+_CIRCULAR = (
+    "with formulation = 'elements': on a circular orbit the pericentre, hence ϖ and τ, is "
+    "undefined and the element equations are singular; use formulation = 'canonical'"
+)
+_PLANAR = (
+    "with formulation = 'elements': in the reference plane (sin i = 0) the node ν is undefined "
+    "and the element equations are singular; use formulation = 'canonical', or tilt the axes"
+)
+
+
+def _canonical_state(bodies: tuple[Body, ...], G: Number, M: Number) -> tuple[tuple, tuple]:
+    """(ξ of every body, pᵢ = mᵢx′ᵢ of every body) at the start time, as decimal text."""
+    with mpmath.workdps(STATE_DIGITS + 10):
+        states = [b.state(M, G) for b in bodies]
+        eta = [c for x, _ in states for c in x]
+        varpi = [_mpf(b.mass) * c for b, (_, v) in zip(bodies, states, strict=True) for c in v]
+        text = [mpmath.nstr(c, STATE_DIGITS, strip_zeros=False) for c in (*eta, *varpi)]
+    return tuple(text[: len(eta)]), tuple(text[len(eta) :])
+
+
+def _check_bodies(bodies: tuple[Body, ...], formulation: str, G: Number, M: Number) -> None:
+    """Refuse states the formulation cannot take: coincident bodies (H is singular), and for
+    Hamilton's elements unbound, rectilinear, circular or planar relative orbits."""
+    with mpmath.workdps(40):
+        states = [b.state(M, G) for b in bodies]
+        for k, (x, _) in enumerate(states):
+            for i in range(k):
+                d = [a - b for a, b in zip(x, states[i][0], strict=True)]
+                if mpmath.sqrt(dot(d, d)) <= mpmath.mpf(10) ** -30 * mpmath.sqrt(dot(x, x)):
+                    raise SceneError(
+                        f"hamiltonian.bodies[{k}]",
+                        f"starts at the position of hamiltonian.bodies[{i}]: their distance is "
+                        "0 and H is singular there",
+                    )
+        if formulation != "elements":
+            return
+        for k, (body, (x, xp)) in enumerate(zip(bodies, states, strict=True)):
+            if body.elements is not None:
+                continue  # checked with the elements: bound, e > 0, sin i > 0
+            where = f"hamiltonian.bodies[{k}].velocity"
+            m, Mf, Gf = _mpf(body.mass), _mpf(M), _mpf(G)
+            mu = (1 + m / Mf) * dot(xp, xp) / 2 - Gf * Mf / mpmath.sqrt(dot(x, x))
+            if mu >= 0:
+                raise SceneError(
+                    where,
+                    f"gives an unbound relative orbit (μ = {mpmath.nstr(mu, 6)} ≥ 0): Hamilton's "
+                    "elements need an ellipse; use formulation = 'canonical'",
+                )
+            _check_exact_state(body, where, M, G)
+
+
+def _check_exact_state(body: Body, where: str, M: Number, G: Number) -> None:
+    """Rectilinear, planar and circular relative orbits, decided exactly in rationals."""
+    x = [exact_fraction(c) for c in body.position]
+    xp = [exact_fraction(c) for c in body.velocity]
+    L = cross(x, xp)
+    if all(c == 0 for c in L):
+        raise SceneError(where, "gives rectilinear motion (ξ × x′ = 0): λ = 0 has no orbit plane")
+    if L[0] == 0 and L[1] == 0:
+        raise SceneError(
+            where, "puts the orbit in the reference plane (i = 0 or π), refused " + _PLANAR
+        )
+    m, Mf, Gf = (exact_fraction(v) for v in (body.mass, M, G))
+    v = [(1 + m / Mf) * c for c in xp]
+    # e = 0 exactly: ξ·v = 0 and |v|² = K/r, i.e. |v|⁴ |ξ|² = K².
+    if dot(x, v) == 0 and dot(v, v) ** 2 * dot(x, x) == (Gf * (Mf + m)) ** 2:
+        raise SceneError(where, "gives a circular relative orbit (e = 0), refused " + _CIRCULAR)

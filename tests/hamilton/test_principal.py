@@ -69,3 +69,23 @@ def test_a_wrong_principal_function_is_caught(monkeypatch):
     monkeypatch.setattr(model, "principal_rate", lambda H, s, v: original(H, s, v) + 1e-6)
     check = check_principal_function(Scene.from_dict(projectile("double")))
     assert np.all(np.abs(check.time[1:] - 1e-6) < 1e-12)
+
+
+def test_principal_function_of_relative_motion():
+    """Check N7 of the notes: δS = Σ m(x′·δξ − a′·δa) for two planets about a predominant
+    mass, in (F2.)'s canonical heliocentric coordinates (whose outputs use parameters the
+    equations do not)."""
+    elements = {"e": "0.05", "inclination": "0.05", "node": "0.3"}
+    elements |= {"argument_of_pericentre": "1.1", "mean_anomaly": "0.4"}
+    bodies = [
+        {"mass": "0.001", "elements": {"a": "1", **elements}},
+        {"mass": "0.0003", "elements": {"a": "1.8", **elements, "e": "0.08"}},
+    ]
+    d = {
+        "hamiltonian": {"model": "predominant_mass", "G": "1", "central_mass": "1"},
+        "output": {"times": {"start": "0", "stop": "6", "count": 7}},
+    }
+    d["hamiltonian"]["bodies"] = bodies
+    check = check_principal_function(Scene.from_dict(d))
+    assert np.all(np.isfinite(check.condition[1:]))
+    assert_within(check, EPS["double"], scale=check.scale)
