@@ -123,7 +123,7 @@ def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
     a.variables, a.initial, a.R = rho, rho0, R
     a.rhs = eq.rodrigues_kinematics(rho, rates)
     if body.forces:
-        a.potential = _potential(body, R, rho_total, inertia, pars)
+        a.potential = force_function(body, R, rho_total, inertia, pars)
         a.torque = eq.cayley_torque(a.potential, rho)
     a.outputs = dict(zip(("lambda", "mu", "nu"), rho_total, strict=True))
     a.outputs.update(zip(("qw", "qx", "qy", "qz"), [c / norm for c in q_total], strict=True))
@@ -147,7 +147,7 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     a.rhs = eq.quaternion_kinematics(quat, rates)
     if body.forces:
         names = [[hy.expression(f"R{i + 1}{j + 1}__") for j in range(3)] for i in range(3)]
-        V = _potential(body, names, _rodrigues_of_matrix(names), inertia, pars)
+        V = force_function(body, names, rodrigues_of_matrix(names), inertia, pars)
         a.torque = eq.matrix_torque(V, names, R)
         a.potential = hy.subs(V, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
     a.outputs = dict(
@@ -164,13 +164,16 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     return a
 
 
-def _potential(body: RigidBody, R, rho_total, inertia, pars: ParTable):
+def force_function(body: RigidBody, R, rho_total, inertia, pars: ParTable) -> hy.expression:
+    """The scene's force function V (the sum of its forces) on the attitude matrix ``R`` and
+    the Cayley–Rodrigues parameters ``rho_total`` of the whole attitude."""
     ctx = ForceContext(R, rho_total, inertia, pars)
     terms = [force.potential(ctx) for force in body.forces]
     return terms[0] if len(terms) == 1 else hy.sum(terms)
 
 
-def _rodrigues_of_matrix(R):
+def rodrigues_of_matrix(R) -> list:
+    """Cayley–Rodrigues parameters of a rotation matrix (of expressions), away from θ = π."""
     upsilon = 1 + R[0][0] + R[1][1] + R[2][2]
     return [
         (R[2][1] - R[1][2]) / upsilon,
