@@ -104,18 +104,34 @@ def check_scene(scene: Scene) -> CheckReport:
     """Run the consistency check that fits ``scene``.
 
     * ``hamiltonian`` family: the partial derivatives of the principal function S
-      (:func:`cayley_heyoka.hamilton.principal.check_principal_function`).
+      (:func:`cayley_heyoka.hamilton.principal.check_principal_function`); for the system with
+      one predominant mass, Hamilton's varying elements against the canonical equations
+      (:func:`cayley_heyoka.hamilton.planets_check.check_formulations`).
+    * ``rotation`` family with forces: Cayley's 1846 element equations (62)–(63) against the
+      elements' actual rates (:func:`cayley_heyoka.rotation.element_check.check_element_equations`).
 
     Raises
     ------
     SceneError
         When no check applies to the scene.
+    ValueError
+        When the check cannot be carried through (e.g. a forced body whose free motion stops
+        passing Cayley's υ₀), naming the reason.
     """
+    if scene.family == "hamiltonian" and scene.model.model == "predominant_mass":
+        from .hamilton.planets_check import check_formulations
+
+        return check_formulations(scene)
     if scene.family == "hamiltonian":
         from .hamilton.principal import check_principal_function
 
         return check_principal_function(scene).report()
+    if scene.family == "rotation" and scene.model.forces:
+        from .rotation.element_check import check_element_equations
+
+        return check_element_equations(scene)
     raise SceneError(
         "scene",
-        f"no consistency check for this {scene.family} scene; `check` covers hamiltonian scenes",
+        f"no consistency check for this {scene.family} scene; `check` covers hamiltonian scenes "
+        "and rotation scenes with forces",
     )

@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
 def _check(args: argparse.Namespace) -> int:
     try:
         report = check_scene(load_scene(args.scene))
-    except SceneError as exc:
+    except ValueError as exc:  # SceneError, or a check that cannot be carried through
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
     if args.out:

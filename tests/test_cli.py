@@ -141,3 +141,18 @@ def test_check_fails_with_exit_1_when_S_is_wrong(tmp_path, capsys, monkeypatch):
 def test_check_refuses_a_scene_it_has_no_check_for(capsys):
     assert main(["check", str(EXAMPLES / "free_body.toml")]) == 2
     assert "no consistency check" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("scene", ["top_weakly_forced.toml", "planets.toml"])
+def test_check_of_the_bundled_scenes_that_have_one(capsys, scene):
+    """Cayley's 1846 element equations along the weakly forced top; Hamilton's elements
+    against the canonical equations for the two planets (1000 orbits)."""
+    assert main(["check", str(EXAMPLES / scene)]) == 0
+    assert "passed" in capsys.readouterr().out
+
+
+def test_check_that_cannot_be_carried_through_says_why(capsys):
+    """The bundled heavy top is strongly forced: the free motion through its state stops
+    passing υ₀ at t ≈ 15, and Cayley's e, δ lose their passage."""
+    assert main(["check", str(EXAMPLES / "heavy_top.toml")]) == 2
+    assert "upsilon0" in capsys.readouterr().err

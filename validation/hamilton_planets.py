@@ -18,35 +18,18 @@ from __future__ import annotations
 import math
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cayley_heyoka import Scene, run
+from cayley_heyoka import Scene, load_scene, run
 
-BODIES = (
-    (
-        "0.001",
-        {
-            "a": "1",
-            "e": "0.05",
-            "inclination": "0.05",
-            "node": "0.3",
-            "argument_of_pericentre": "1.1",
-            "mean_anomaly": "0.4",
-        },
-    ),
-    (
-        "0.0003",
-        {
-            "a": "1.8",
-            "e": "0.08",
-            "inclination": "0.08",
-            "node": "2.0",
-            "argument_of_pericentre": "4.0",
-            "mean_anomaly": "2.5",
-        },
-    ),
+# The bodies of the bundled example, which is check N5: the one place their numbers live.
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "planets.toml"
+BODIES = tuple(
+    (body["mass"], body["elements"])
+    for body in load_scene(EXAMPLE).to_dict()["hamiltonian"]["bodies"]
 )
 TWO_PI = "6.283185307179586476925286766559005768394"
 

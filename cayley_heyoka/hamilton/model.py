@@ -59,15 +59,7 @@ def build_model(scene: Scene) -> Model:
         outputs["S"] = S
     monitors = {"energy": energy}
     conserved = () if ham.time_dependent else ("energy",)
-    wanted = scene.output.monitors
-    if wanted is not None:
-        unknown = [m for m in wanted if m not in monitors]
-        if unknown:
-            raise SceneError(
-                "output.monitors", f"{unknown[0]!r} is not available here; available: ['energy']"
-            )
-        monitors = {k: v for k, v in monitors.items() if k in wanted}
-        conserved = tuple(k for k in conserved if k in wanted)
+    monitors, conserved = select_monitors(scene, monitors, conserved)
     events = _events(scene, outputs, pars)
     return Model(
         "hamiltonian",
@@ -157,6 +149,21 @@ def _elements(scene, ham: Hamiltonian, eta, varpi, H1, H2, pars: ParTable, prec)
     eta_rates = [rhs for _, rhs in canonical_equations(H, eta, varpi)[:n]]
     lagrangian = hy.sum([p * r for p, r in zip(varpi, eta_rates, strict=True)]) - H
     return system, outputs, energy, compose(lagrangian, eta, varpi, flow_eta, flow_varpi)
+
+
+def select_monitors(scene: Scene, monitors: dict, conserved: tuple) -> tuple[dict, tuple]:
+    """The monitors the scene's ``output.monitors`` asks for (all when it names none)."""
+    wanted = scene.output.monitors
+    if wanted is None:
+        return monitors, conserved
+    unknown = [m for m in wanted if m not in monitors]
+    if unknown:
+        raise SceneError(
+            "output.monitors",
+            f"{unknown[0]!r} is not available here; available: {list(monitors)}",
+        )
+    chosen = {k: v for k, v in monitors.items() if k in wanted}
+    return chosen, tuple(k for k in conserved if k in wanted)
 
 
 def _principal_function(scene: Scene) -> bool:

@@ -24,7 +24,7 @@ from ..precision import Number, exact_fraction
 from ..scene import Scene
 from . import planets
 from . import planets_equations as pe
-from .model import _events, _principal_function
+from .model import _events, _principal_function, select_monitors
 from .scene import Hamiltonian
 
 _GUARD_DIGITS = 15
@@ -74,17 +74,7 @@ def build_model(scene: Scene) -> Model:
         system, outputs, monitors, initial = _offsets(system, outputs, monitors, initial, pars)
     if "S" in outputs:
         initial.append("0")
-    conserved = ("energy", "angular_momentum")
-    wanted = scene.output.monitors
-    if wanted is not None:
-        unknown = [m for m in wanted if m not in monitors]
-        if unknown:
-            raise SceneError(
-                "output.monitors",
-                f"{unknown[0]!r} is not available here; available: {list(monitors)}",
-            )
-        monitors = {k: v for k, v in monitors.items() if k in wanted}
-        conserved = tuple(k for k in conserved if k in wanted)
+    monitors, conserved = select_monitors(scene, monitors, ("energy", "angular_momentum"))
     events = _events(scene, outputs, pars)
     return Model(
         "hamiltonian",

@@ -19,13 +19,14 @@ from __future__ import annotations
 
 import copy
 import math
+from pathlib import Path
 
 import heyoka as hy
 import mpmath
 import numpy as np
 import pytest
 
-from cayley_heyoka import Scene, SceneError, run
+from cayley_heyoka import Scene, SceneError, load_scene, run
 from cayley_heyoka.hamilton import planets
 from cayley_heyoka.hamilton import planets_equations as pe
 from cayley_heyoka.hamilton.elements import lagrange_brackets
@@ -35,25 +36,10 @@ from cayley_heyoka.orbit.elements import Elements
 EPS = 2.0**-52
 EPS_QUAD = 2.0**-112
 TWO_PI = "6.283185307179586476925286766559005768394"
-MASSES = ("0.001", "0.0003")
-ELEMENTS = (
-    {
-        "a": "1",
-        "e": "0.05",
-        "inclination": "0.05",
-        "node": "0.3",
-        "argument_of_pericentre": "1.1",
-        "mean_anomaly": "0.4",
-    },
-    {
-        "a": "1.8",
-        "e": "0.08",
-        "inclination": "0.08",
-        "node": "2.0",
-        "argument_of_pericentre": "4.0",
-        "mean_anomaly": "2.5",
-    },
-)
+# Check N5 of the notes: the bodies of the bundled example (their numbers live there only).
+_N5 = load_scene(Path(__file__).resolve().parents[2] / "examples" / "planets.toml").to_dict()
+MASSES = tuple(body["mass"] for body in _N5["hamiltonian"]["bodies"])
+ELEMENTS = tuple(body["elements"] for body in _N5["hamiltonian"]["bodies"])
 POSITIONS = ("x1", "y1", "z1", "x2", "y2", "z2")
 VELOCITIES = ("vx1", "vy1", "vz1", "vx2", "vy2", "vz2")
 STATE_FLOOR = 4 * 1.8 / 0.05  # × ε: the starting state's ε a/e
