@@ -10,6 +10,7 @@ with enough digits to load back bit-for-bit.
 
 from __future__ import annotations
 
+import functools
 import json
 from dataclasses import dataclass, field
 from importlib import metadata as _metadata
@@ -207,15 +208,24 @@ class Result:
             )
 
 
-def versions() -> dict[str, str]:
-    """Versions of this library and of the engine, for result metadata."""
+@functools.cache
+def _versions() -> tuple[tuple[str, str], ...]:
     import heyoka
 
     try:
         ours = _metadata.version("cayley_heyoka")
     except _metadata.PackageNotFoundError:  # running from a source tree
         ours = "unknown"
-    return {"cayley_heyoka": ours, "heyoka": heyoka.__version__, "numpy": np.__version__}
+    return (("cayley_heyoka", ours), ("heyoka", heyoka.__version__), ("numpy", np.__version__))
+
+
+def versions() -> dict[str, str]:
+    """Versions of this library and of the engine, for result metadata.
+
+    Read once per process: looking up package metadata costs ~0.5 ms, a third of a short
+    run's fixed cost.
+    """
+    return dict(_versions())
 
 
 def _str_dtype():

@@ -55,9 +55,10 @@ class Curve:
         )
         if not pts or error < pts[0][0] or error > pts[-1][0]:
             return math.nan
-        # The cheapest time reaching at least this accuracy (curves need not be monotone).
+        # The cheapest time reaching at least this accuracy (curves need not be monotone):
+        # sorted by error, the running minimum from the most accurate point on.
         le, lt = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
-        lt = np.minimum.accumulate(lt[::-1])[::-1]
+        lt = np.minimum.accumulate(lt)
         return float(np.exp(np.interp(math.log(error), le, lt)))
 
 
