@@ -69,6 +69,7 @@ _TERMINAL_HINTS = {
     "rebasings": "the Rodrigues chart's re-basing; use attitude.formulation = 'quaternion'",
     "revolutions": "the count of ρ's revolutions; use orbit.formulation = 'cartesian'",
     "equatorial_stops": "the equatorial stop; use orbit.formulation = 'cartesian'",
+    "rectifications": "Encke's rectification; use orbit.formulation = 'cartesian'",
 }
 # Members per task handed to a worker: large enough that the task overhead (a queue
 # round trip, a few µs) stays below a member's cost, small enough to balance two workers

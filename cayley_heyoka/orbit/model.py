@@ -5,6 +5,9 @@
   accuracy like ε/sin Φ there: see docs/orbits.md).
 * ``quaternion``: (r, ṙ, ρ, h) and the orbit frame as a unit quaternion: regular everywhere.
 * ``cartesian``: ẍ = −μx/r³ + ∇Ω, the independent check and a formulation of its own.
+* ``encke``: the deviation from an osculating Kepler orbit, rectified at every apocentre by a
+  terminal event (:mod:`.encke`); the same force model as ``cartesian``, with its rounding
+  carried by a state ~10⁻⁴ of the orbit.
 
 Ω and its gradient are built once, on Cartesian placeholders, and composed with the
 formulation's position. Only the terms the scene names are compiled; the reference plane
@@ -27,6 +30,8 @@ from . import elements as el
 from . import equations as eq
 from . import frames
 from .disturbing import Context, disturbing_function, gradient
+from .encke import STATE as ENCKE
+from .encke import Encke
 from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
 
@@ -48,15 +53,17 @@ def build_model(scene: Scene) -> Model:
     ctx = Context(mu, pars, prec.dps + _GUARD_DIGITS)
     Omega = disturbing_function(orbit.perturbations, X, ctx)
     g = gradient(Omega, X) if Omega is not None else None
-    start = initial_state(orbit, _start_time(scene), prec.dps + _GUARD_DIGITS)
+    t0 = _start_time(scene)
 
     b = _Builder(orbit, pars, plane, mu, Omega, g, X, prec)
-    if orbit.formulation == "cartesian":
-        b.cartesian(start)
-    elif orbit.formulation == "cayley":
-        b.cayley(start)
+    if orbit.formulation == "encke":
+        # Its initial state is the deviation from the initial osculating ellipse, which the
+        # formulation's own rectification computes.
+        with mpmath.workdps(prec.dps + _GUARD_DIGITS):
+            b.encke(*initial_cartesian(orbit, _mpf(t0)))
     else:
-        b.quaternion(start)
+        start = initial_state(orbit, t0, prec.dps + _GUARD_DIGITS)
+        getattr(b, orbit.formulation)(start)
 
     monitors, conserved = _monitors(orbit, b, ctx)
     wanted = scene.output.monitors
@@ -94,6 +101,12 @@ def check(scene: Scene) -> None:
         energy = frames.dot(v, v) / 2 - mu / r
         e = mpmath.sqrt(max(mpmath.mpf(0), 1 + 2 * energy * h * h / (mu * mu)))
         q = h * h / (mu * (1 + e))
+        if orbit.formulation == "encke" and e >= 1:
+            raise SceneError(
+                "orbit.formulation",
+                f"'encke' follows an osculating ellipse, but the orbit starts with e = "
+                f"{mpmath.nstr(e, 6)} ≥ 1 (parabolic or hyperbolic); use 'cartesian'",
+            )
         third = orbit.third_body
         if third is not None and third.degree is not None:
             apo = mpmath.inf if e >= 1 else q * (1 + e) / (1 - e)
@@ -137,7 +150,10 @@ def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
 
 
 def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
-    """The formulation's initial state as decimal text with ``dps`` digits."""
+    """The formulation's initial state as decimal text with ``dps`` digits (not ``encke``,
+    whose state depends on the parameters its model allocates: see :meth:`_Builder.encke`)."""
+    if orbit.formulation == "encke":
+        raise ValueError("the encke state is the deviation from its ellipse: build the model")
     with mpmath.workdps(dps):
         t = _mpf(t)
         x, v = initial_cartesian(orbit, t)
@@ -197,6 +213,30 @@ class _Builder:
         self.node_function = frames.dot(self._plane_normal(), x)
         self.apsis_function = frames.dot(x, v)
         self.radius = hy.sqrt(frames.dot(x, x))
+
+    def encke(self, x: list, v: list) -> None:
+        """δ = x − y from the osculating ellipse y, and ψ = E/2, half its eccentric anomaly
+        (:mod:`.encke`)."""
+        d = list(hy.make_vars(*ENCKE[:3]))
+        dv = list(hy.make_vars(*ENCKE[3:6]))
+        psi = hy.make_vars(ENCKE[6])
+        en = Encke(self.pars, self.precision, self.mu, self.orbit.mu)
+        self.initial = en.start(x, v)
+        y, ydot, parts = en.curve(psi)
+        self.position = [y[i] + d[i] for i in range(3)]
+        self.velocity = [ydot[i] + dv[i] for i in range(3)]
+        acc = en.acceleration(y, d, parts)
+        if self.g is not None:
+            acc = [a + self.at_position(gi) for a, gi in zip(acc, self.g, strict=True)]
+        rates = [*dv, *acc, parts["psi_rate"]]
+        self.system = list(zip([*d, *dv, psi], rates, strict=True))
+        x_, v_ = self.position, self.velocity
+        self.momentum = frames.cross(x_, v_)
+        self.outputs = dict(zip(CARTESIAN, [*x_, *v_], strict=True))
+        self.node_function = frames.dot(self._plane_normal(), x_)
+        self.apsis_function = frames.dot(x_, v_)
+        self.radius = hy.sqrt(frames.dot(x_, x_))
+        self.terminal.append(TerminalSpec(en.event(psi), 1, en, "rectifications"))
 
     def cayley(self, start: list[str]) -> None:
         r, rdot, rho, h, Theta, Sigma, Phi = hy.make_vars(*CAYLEY)

@@ -12,7 +12,7 @@ from ..precision import Number, exact_fraction
 from ..scene import check_keys, number, vector
 from .disturbing import ThirdBody, Zonal, parse_perturbations
 
-FORMULATIONS = ("cayley", "quaternion", "cartesian")
+FORMULATIONS = ("cayley", "quaternion", "cartesian", "encke")
 ELEMENT_KEYS = ("a", "e", "inclination", "node", "argument_of_pericentre", "mean_anomaly")
 #: Default of ``orbit.equatorial_limit``: below this sin Φ the Cayley angles stop (see docs).
 EQUATORIAL_LIMIT = "1e-3"
@@ -58,7 +58,8 @@ class Orbit:
         with the classical elements referred to the reference plane at the start time.
     formulation
         ``"cayley"`` (r, ṙ, ρ, h, Θ, Σ, Φ), ``"quaternion"`` (r, ṙ, ρ, h and the orbit frame as
-        a quaternion: regular at every inclination) or ``"cartesian"``.
+        a quaternion: regular at every inclination), ``"cartesian"`` or ``"encke"`` (the
+        deviation from an osculating ellipse, rectified at every apocentre).
     sigma0
         Gauge Σ at the start time (where the departure point sits on the orbit).
     equatorial_limit
@@ -100,8 +101,8 @@ class Orbit:
             raise SceneError(
                 "orbit.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
             )
-        if formulation == "cartesian" and "sigma0" in table:
-            raise SceneError("orbit.sigma0", "has no meaning for formulation = 'cartesian'")
+        if formulation in ("cartesian", "encke") and "sigma0" in table:
+            raise SceneError("orbit.sigma0", f"has no meaning for formulation = {formulation!r}")
         sigma0 = number(table.get("sigma0", 0), "orbit.sigma0")
         limit = number(table.get("equatorial_limit", EQUATORIAL_LIMIT), "orbit.equatorial_limit")
         if not 0 <= exact_fraction(limit) < 1:

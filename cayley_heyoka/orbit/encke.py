@@ -1,0 +1,386 @@
+"""Encke's formulation: the deviation δ from an osculating Kepler orbit, rectified every orbit.
+
+The body is written ``x = y + δ``, where ``y`` is a Kepler ellipse known in closed form and
+``δ`` is integrated. At every apocentre a terminal event *rectifies*: the handler forms
+``x = y + δ`` and ``v = ẏ + δ̇`` in extended precision, puts ``y`` on the osculating ellipse of
+that state and sets δ to the difference, of the order of the rounding. Between rectifications
+``|δ|`` stays of the order of the perturbation's effect over one orbit (~10⁻⁴ of the orbit for
+J2 = 10⁻³), so the rounding of the integrated state, which limits the Cartesian formulation,
+is that much smaller.
+
+The ellipse. With ``A = a P̂``, ``B = a√(1 − e²) Q̂`` and its eccentric anomaly E::
+
+    y = (cos E − e) A + sin E B,        ẏ = Ė (cos E B − sin E A),
+    Ė = n/D,   D = 1 − e cos E,         ÿ = −(n²/D³) y,
+
+the last exactly, for *any* vectors A, B: the curve the equations use is the one the rounded
+parameters define, whether or not it is exactly a Kepler orbit of μ. E is integrated, as
+``ψ = E/2`` beside δ, rather than solved from Kepler's equation: heyoka's ``kepE`` forms
+``1 − e cos E`` in the Taylor recurrences of E, which at the pericentre of an eccentric orbit
+loses ε/(1 − e) of it, and a phase ``n (t − t₀)`` would carry the rounding of t, which heyoka
+hands its equations as the leading double of its double-length time (~4·10⁻¹² near
+t = 6·10⁴). The half angle ψ keeps ``cos E − e = (1 − e) − 2 sin²ψ`` and
+``D = (1 − e) + 2e sin²ψ`` accurate there too. An error in ψ moves x and v together along the
+ellipse, so it changes neither the energy nor the period (to first order in δ): it does not
+feed the Kepler shear.
+
+The equation of δ (Battin's form, no difference of nearly equal forces)::
+
+    δ̈ = μ/(ρ³S³) (F(q) y − δ) − (n²/D³) F(p) y + ∇Ω(y + δ),
+
+with ``ρ = |y|``, ``q = (2 y·δ + δ·δ)/ρ²``, ``S = √(1 + q)``, ``F(q) = (1 + q)^{3/2} − 1``
+written as ``q (1 + S + S²)/(1 + S)``, and ``p = (α u² + β w² − 2γ u w)/ρ²``
+(``u = cos E − e``, ``w = sin E``) the mismatch, exactly known, between the rounded parameters
+and a Kepler orbit of μ: ``α = k² − |A|²``, ``β = k²(1 − e²) − |B|²``, ``γ = A·B``,
+``k³ = μ/n²``. p is of the order of the run's ε (times 1/(1 − e²)² at most), so
+``F(p) = 3p/2`` to O(p²). Ω is the family's Cartesian disturbing function
+(:mod:`.disturbing`) evaluated at ``y + δ``.
+
+The rectification happens where E reaches π (a terminal event ``ψ = π/2``): the ellipse's
+apocentre, where the motion is slowest. heyoka scales its tolerance by the largest of the
+state's and the event functions' values, so the event is on ψ (|ψ − π/2| ≤ 9π/8), not on t;
+of the scalings of E tried (E … E/256), E/2 was the most accurate (docs/orbits.md).
+
+Extended precision. The handler works in numpy's 80-bit long double for double runs (x86-64)
+and in mpmath with 64 guard bits otherwise: it reads the state and the parameters exactly,
+rounds each new parameter once to the run's precision, and computes δ from the curve those
+rounded parameters define, so that ``y + δ`` is continuous across a rectification to the
+extended precision. An osculating orbit that is not an ellipse (e ≥ 1) ends the run there.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Sequence
+from typing import Any
+
+import heyoka as hy
+import mpmath
+import numpy as np
+
+from ..model import ParTable
+from ..precision import Precision
+from . import frames
+
+Expr = Any  # a heyoka expression
+STATE = ("dx", "dy", "dz", "dvx", "dvy", "dvz", "psi")
+#: Runtime parameters of the osculating ellipse (``encke.*``), in the order they are allocated.
+PARAMETERS = (
+    "e",
+    "one_minus_e",
+    "n",
+    "A[0]",
+    "A[1]",
+    "A[2]",
+    "B[0]",
+    "B[1]",
+    "B[2]",
+    "alpha",
+    "beta",
+    "gamma",
+    "n2",
+    "next",
+)
+#: Those that place a point on the ellipse (what the handler reads back).
+_CURVE = ("e", "one_minus_e", "n", "A[0]", "A[1]", "A[2]", "B[0]", "B[1]", "B[2]")
+_LONG_DOUBLE_BITS = 63  # significand bits of x87 extended precision, without the leading one
+_GUARD_BITS = 64
+
+
+class Unbound(ArithmeticError):
+    """The osculating orbit is not an ellipse (e ≥ 1): Encke's reference orbit is undefined."""
+
+    def __init__(self, e: Any) -> None:
+        super().__init__(f"the osculating orbit is not an ellipse (e = {float(e):.6g})")
+        self.e = e
+
+
+class Encke:
+    """The parameters, equations and rectification of Encke's formulation for one scene.
+
+    Parameters
+    ----------
+    pars
+        The model's parameter table; ``encke.*`` parameters are allocated in it.
+    precision
+        The run's precision.
+    mu
+        The parameter holding μ; ``mu_value`` is its scene number.
+    mu_value
+        μ as given (decimal text or number), rounded here to the run's precision as the
+        equations see it.
+    """
+
+    def __init__(self, pars: ParTable, precision: Precision, mu: Expr, mu_value: Any) -> None:
+        self.precision = precision
+        self.arith = _arithmetic(precision)
+        self.mu = mu
+        self._mu_run = precision.number(mu_value)
+        self.par = {name: pars.add(f"encke.{name}", "0") for name in PARAMETERS}
+        self.index = {name: pars.index(f"encke.{name}") for name in PARAMETERS}
+        self._pars = pars
+
+    # ------------------------------------------------------------------ equations
+    def curve(self, psi: Expr) -> tuple[list[Expr], list[Expr], dict[str, Expr]]:
+        """y, ẏ, ψ̇ and the pieces the equation of δ reuses, as expressions of ψ = E/2."""
+        y, ydot, parts = self.ellipse(hy.sin(psi), hy.cos(psi))
+        parts["psi_rate"] = 0.5 * parts["rate"]
+        return y, ydot, parts
+
+    def ellipse(self, s: Expr, c: Expr) -> tuple[list[Expr], list[Expr], dict[str, Expr]]:
+        """y, ẏ and the pieces of the equation of δ from s = sin(E/2), c = cos(E/2)."""
+        p = self.par
+        e, one_minus_e = p["e"], p["one_minus_e"]
+        # cos E − e = (1 − e) − 2 sin²(E/2) and D = 1 − e cos E = (1 − e) + 2e sin²(E/2) keep
+        # their relative accuracy at the pericentre of an eccentric orbit, where the direct
+        # forms lose ε/(1 − e).
+        h2 = 2.0 * s * s
+        u, w = one_minus_e - h2, 2.0 * s * c  # cos E − e, sin E
+        cE = 1.0 - h2
+        D = one_minus_e + e * h2
+        A = [p[f"A[{i}]"] for i in range(3)]
+        B = [p[f"B[{i}]"] for i in range(3)]
+        y = [u * A[i] + w * B[i] for i in range(3)]
+        rate = p["n"] / D  # Ė
+        ydot = [rate * (cE * B[i] - w * A[i]) for i in range(3)]
+        return y, ydot, {"u": u, "w": w, "D": D, "rate": rate}
+
+    def acceleration(
+        self, y: Sequence[Expr], d: Sequence[Expr], parts: dict[str, Expr]
+    ) -> list[Expr]:
+        """The Kepler part of δ̈, μ/(ρ³S³) (F(q) y − δ) − (n²/D³) F(p) y (Battin)."""
+        p = self.par
+        u, w, D = parts["u"], parts["w"], parts["D"]
+        rho2 = _dot(y, y)
+        mismatch = p["alpha"] * u * u + p["beta"] * w * w - 2.0 * p["gamma"] * u * w
+        Fp = 1.5 * mismatch / rho2
+        q = (2.0 * _dot(y, d) + _dot(d, d)) / rho2
+        S = hy.sqrt(1.0 + q)
+        Fq = q * (1.0 + S + S * S) / (1.0 + S)
+        rS = hy.sqrt(rho2) * S  # |y + δ|
+        c1 = self.mu / (rS * rS * rS)
+        c2 = p["n2"] / (D * D * D) * Fp
+        return [c1 * (Fq * y[i] - d[i]) - c2 * y[i] for i in range(3)]
+
+    def event(self, psi: Expr) -> Expr:
+        """Zero where ψ reaches the next apocentre, E = π (crossed upwards)."""
+        return psi - self.par["next"]
+
+    # --------------------------------------------------------------- rectification
+    def start(self, x: Sequence[Any], v: Sequence[Any]) -> list[str]:
+        """Rectify on the initial state (mpmath numbers): set the parameters' values in the
+        table and return the initial (δ, ψ) as decimal text."""
+        ar = _MpArithmetic(self.precision)
+        with ar.context():
+            X = [ar.exact(c) for c in x]
+            V = [ar.exact(c) for c in v]
+            values, state = _rectify(ar, ar.scalar(self._mu_run), X, V)
+        for name, value in values.items():
+            self._pars.values[self.index[name]] = ar.text(value)
+        return [ar.text(c) for c in state]
+
+    def anomaly(self, ta: Any, pars: Any) -> Any:
+        """The ellipse's eccentric anomaly E = 2ψ at the integrator's state, in extended
+        precision."""
+        return 2 * self.arith.scalar(ta.state[6])
+
+    def __call__(self, ta: Any, pars: Any) -> str | None:
+        """Terminal-event handler: rectify on the state reached (δ to round-off, ψ to the new
+        ellipse's anomaly)."""
+        ar = self.arith
+        with ar.context():
+            mu = ar.scalar(self._mu_run)
+            old = {name: ar.scalar(pars[self.index[name]]) for name in _CURVE}
+            st = ta.state
+            y, ydot = _ellipse(ar, old, self.anomaly(ta, pars))
+            X = [y[i] + ar.scalar(st[i]) for i in range(3)]
+            V = [ydot[i] + ar.scalar(st[3 + i]) for i in range(3)]
+            try:
+                values, state = _rectify(ar, mu, X, V)
+            except Unbound as exc:
+                return (
+                    f"{exc} at t = {ta.time}: formulation = 'encke' follows an osculating "
+                    "ellipse and cannot go on. Results are kept up to here; continue with "
+                    "formulation = 'cartesian'"
+                )
+            for name, value in values.items():
+                pars[self.index[name]] = ar.run(value)
+            for i, value in enumerate(state):
+                st[i] = ar.run(value)
+        return None
+
+
+# ---------------------------------------------------------------------- extended arithmetic
+class _LongDouble:
+    """numpy's x87 long double: 11 more bits than double, at numpy-scalar speed."""
+
+    pi = np.arccos(np.longdouble(-1))
+
+    def __init__(self) -> None:
+        self.sqrt, self.sin, self.cos, self.atan2 = np.sqrt, np.sin, np.cos, np.arctan2
+        self.cbrt = np.cbrt
+
+    def context(self) -> Any:
+        return contextlib.nullcontext()
+
+    # Adding a float to a long double zero converts it exactly, at a seventh of the cost of
+    # np.longdouble(value) (~60 ns against ~400 ns: the handler converts ~40 numbers).
+    _zero = np.longdouble(0)
+
+    def scalar(self, value: Any) -> Any:
+        return self._zero + value
+
+    def rounded(self, value: Any) -> Any:
+        """``value`` rounded to double, as an extended number (exactly the run's value)."""
+        return self._zero + float(value)
+
+    def on_unit_grid(self, value: Any) -> Any:
+        """``value`` in [0, 1) rounded to a multiple of 2⁻⁵³."""
+        return np.ldexp(np.rint(np.ldexp(value, 53)), -53)
+
+    def run(self, value: Any) -> float:
+        return float(value)
+
+
+class _MpArithmetic:
+    """mpmath with the run's bits plus guard bits (quad and multiprecision runs, and the
+    initial rectification of every run)."""
+
+    pi: Any = None
+
+    def __init__(self, precision: Precision) -> None:
+        self.precision = precision
+        self.bits = precision.bits
+        self.sqrt, self.sin, self.cos, self.atan2 = (
+            mpmath.sqrt,
+            mpmath.sin,
+            mpmath.cos,
+            mpmath.atan2,
+        )
+        self.cbrt = mpmath.cbrt
+
+    def context(self) -> Any:
+        return _Workprec(self)
+
+    def scalar(self, value: Any) -> mpmath.mpf:
+        """A number of the run's type, exactly: as a sum of doubles (Sterbenz: each remainder
+        ``r − float(r)`` is exact), since its decimal text is only round-trip accurate."""
+        if isinstance(value, float | int):
+            return mpmath.mpf(value)
+        total, rest = mpmath.mpf(0), value
+        for _ in range(self.bits // 53 + 3):
+            d = float(rest)
+            if d == 0.0:
+                break
+            total += mpmath.mpf(d)
+            rest = rest - d
+        return total
+
+    def exact(self, value: Any) -> mpmath.mpf:
+        return mpmath.mpf(value)
+
+    def rounded(self, value: Any) -> mpmath.mpf:
+        """``value`` rounded to the run's precision (nearest), kept as an mpmath number."""
+        with mpmath.workprec(self.bits):
+            return +value
+
+    def on_unit_grid(self, value: Any) -> mpmath.mpf:
+        """``value`` in [0, 1) rounded to a multiple of 2^−bits."""
+        return mpmath.ldexp(mpmath.nint(mpmath.ldexp(value, self.bits)), -self.bits)
+
+    def text(self, value: Any) -> str:
+        return mpmath.nstr(value, self.precision.dps + 10, strip_zeros=False)
+
+    def run(self, value: Any) -> Any:
+        return self.precision.number(self.text(value))
+
+
+class _Workprec:
+    def __init__(self, ar: _MpArithmetic) -> None:
+        self.ar = ar
+        self._ctx = mpmath.workprec(ar.bits + _GUARD_BITS)
+
+    def __enter__(self) -> None:
+        self._ctx.__enter__()
+        self.ar.pi = +mpmath.pi
+
+    def __exit__(self, *exc: Any) -> None:
+        self._ctx.__exit__(*exc)
+
+
+def _arithmetic(precision: Precision) -> Any:
+    """Long double for double runs where it is the 80-bit format, mpmath otherwise."""
+    if precision.kind == "double" and np.finfo(np.longdouble).nmant >= _LONG_DOUBLE_BITS:
+        return _LongDouble()
+    return _MpArithmetic(precision)
+
+
+# ---------------------------------------------------------------------- the ellipse
+def _rectify(ar: Any, mu: Any, X: list, V: list) -> tuple[dict[str, Any], list]:
+    """The osculating ellipse of (X, V), its parameters rounded to the run's precision, and
+    the state (δ, ψ) = (X − y, V − ẏ, E₀/2) on the curve the rounded parameters define."""
+    r = ar.sqrt(_dot(X, X))
+    v2 = _dot(V, V)
+    xv = _dot(X, V)
+    H = frames.cross(X, V)
+    h = ar.sqrt(_dot(H, H))
+    inv_a = 2 / r - v2 / mu
+    ev = [((v2 - mu / r) * X[i] - xv * V[i]) / mu for i in range(3)]
+    e = ar.sqrt(_dot(ev, ev))
+    if not e < 1 or not inv_a > 0 or not h > 0:
+        raise Unbound(e)
+    a = 1 / inv_a
+    # e = 0 exactly leaves the pericentre undefined: any axis of the plane serves.
+    P = [c / e for c in ev] if e > 0 else [c / r for c in X]
+    Q = [c / h for c in frames.cross(H, P)]
+    b = a * ar.sqrt((1 - e) * (1 + e))
+    E0 = ar.atan2(xv / ar.sqrt(mu * a), 1 - r / a) if e > 0 else 0 * e
+    n = ar.sqrt(mu * inv_a) * inv_a
+
+    if E0 > 3 * ar.pi / 4:
+        # Just before apocentre: count from the previous one, so that the next rectification,
+        # at E = π, is at least a quarter of the anomaly ahead and the pericentre is at E = 0.
+        E0 -= 2 * ar.pi
+
+    out: dict[str, Any] = {}
+    # e on the grid of multiples of ε/2, so that 1 − e is exact in the run's precision too.
+    out["e"] = ar.on_unit_grid(e)
+    if not out["e"] < 1:
+        raise Unbound(e)
+    out["one_minus_e"] = 1 - out["e"]
+    out["n"] = ar.rounded(n)
+    A = [ar.rounded(a * c) for c in P]
+    B = [ar.rounded(b * c) for c in Q]
+    for i in range(3):
+        out[f"A[{i}]"], out[f"B[{i}]"] = A[i], B[i]
+    k3 = mu / (out["n"] * out["n"])
+    k2 = ar.cbrt(k3) ** 2
+    e_r = out["e"]
+    out["alpha"] = ar.rounded(k2 - _dot(A, A))
+    out["beta"] = ar.rounded(k2 * (1 - e_r) * (1 + e_r) - _dot(B, B))
+    out["gamma"] = ar.rounded(_dot(A, B))
+    out["n2"] = ar.rounded(out["n"] * out["n"])
+    out["next"] = ar.rounded(ar.pi / 2)
+    psi = ar.rounded(E0 / 2)
+
+    y, ydot = _ellipse(ar, out, 2 * psi)
+    state = [X[i] - y[i] for i in range(3)] + [V[i] - ydot[i] for i in range(3)] + [psi]
+    return out, state
+
+
+def _ellipse(ar: Any, p: dict[str, Any], E: Any) -> tuple[list, list]:
+    """y and ẏ at the anomaly E, of the parameters ``p`` (exact values), in extended
+    precision, by the formulas of :meth:`Encke.curve`."""
+    s, c = ar.sin(E / 2), ar.cos(E / 2)
+    h2 = 2 * s * s
+    u, w, cE = p["one_minus_e"] - h2, 2 * s * c, 1 - h2
+    rate = p["n"] / (p["one_minus_e"] + p["e"] * h2)
+    y = [u * p[f"A[{i}]"] + w * p[f"B[{i}]"] for i in range(3)]
+    ydot = [rate * (cE * p[f"B[{i}]"] - w * p[f"A[{i}]"]) for i in range(3)]
+    return y, ydot
+
+
+def _dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
+    if isinstance(a[0], hy.expression) or isinstance(b[0], hy.expression):
+        return hy.sum([a[i] * b[i] for i in range(3)])
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
