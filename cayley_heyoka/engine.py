@@ -141,24 +141,34 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
     status, message = 0, "every output time was reached"
     stopped_at = None
+    # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
+    # ends a step there. So after a terminal event the grid is resumed from the current time;
+    # propagate_until to the next output would end a step at each output reached after an
+    # event — a rounding kick each, and a trajectory that depends on the output grid. A call
+    # costs O(its points): one after an event covers twice the outputs of the last stretch
+    # between events (the next event usually comes first), doubling while none interrupts it.
+    span, since_event = len(grid), 0
     i = 0
     while i < len(grid):
-        if ta.time != grid[i]:
-            # Resume after a terminal event: reach the next output time first.
-            res = ta.propagate_until(grid[i], callback=callback, **limit)
-            outcome = res[0]
-            counters["steps"] += res[3]
-        else:
-            res = ta.propagate_grid(grid[i:], callback=callback, **limit)
-            outcome, out = res[0], res[-1]
-            counters["steps"] += res[3]
-            states.append(out)
-            # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
-            pars_rows += [pars.copy() for _ in range(len(out))]
-            i += len(out)
+        resume = ta.time != grid[i]
+        points = grid[i : i + span]
+        if resume:
+            points = _starting_at(prec, ta.time, points)
+        res = ta.propagate_grid(points, callback=callback, **limit)
+        outcome, out = res[0], res[-1]
+        if resume:
+            out = out[1:]  # the current time: not an output time, or recorded already
+        counters["steps"] += res[3]
+        states.append(out)
+        # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
+        pars_rows += [pars.copy() for _ in range(len(out))]
+        i += len(out)
+        since_event += len(out)
         code = int(outcome)
         if outcome == hy.taylor_outcome.time_limit:
+            span = min(2 * span, len(grid))
             continue
+        span, since_event = 2 * since_event + _RESUME_SPAN, 0
         if -len(model.terminal) <= code <= -1:
             spec = model.terminal[-code - 1]
             stop = spec.handle(ta, pars)
@@ -210,6 +220,18 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
 
 
 # ---------------------------------------------------------------------- internals
+#: Output times added to a propagate_grid call after a terminal event (see ``run``).
+_RESUME_SPAN = 8
+
+
+def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:
+    """``points`` preceded by the current time ``t`` (heyoka's grids start there)."""
+    if prec.kind == "double":
+        return np.concatenate(([t], points))
+    # Through Python objects: numpy's copies of heyoka's multiprecision dtype alias limbs.
+    return prec.array([t, *points])
+
+
 class _Recorder:
     """Non-terminal event callback: remembers each occurrence's time and direction."""
 

@@ -139,6 +139,30 @@ def test_max_step_caps_steps_without_recompiling():
     assert np.allclose(capped["qw"], free["qw"], rtol=0, atol=1e-13)
 
 
+@pytest.mark.parametrize("prec_name", ["double", "quad"])
+def test_output_times_do_not_perturb_a_run_with_terminal_events(prec_name):
+    """Outputs come from dense output even between chart re-basings (terminal events): with
+    outputs sparser and denser than the re-basings, the step count and the last state are the
+    same. Reaching each output with propagate_until would end a step there — one rounding
+    kick per output, and a cost that grew with the remaining grid at every output."""
+    prec = PRECISIONS[prec_name]
+    stop = "200" if prec_name == "double" else "20"
+
+    def scene(count):
+        return Scene.from_dict(
+            free_body(
+                integrator={"precision": prec.to_spec()},
+                output={"times": {"start": "0", "stop": stop, "count": count}},
+            )
+        )
+
+    sparse, dense = run(scene(2)), run(scene(401))
+    assert dense.counters["rebasings"] > 5
+    assert dense.counters == sparse.counters
+    for name in ("p", "q", "r", "qw", "qx", "qy", "qz"):
+        assert dense[name][-1] == sparse[name][-1], name
+
+
 def test_a_run_that_blows_up_keeps_what_it_computed():
     data = free_body(
         forces={"potential": {"V": "exp(100 * (t - 6)) * lambda"}},
