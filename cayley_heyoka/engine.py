@@ -27,9 +27,23 @@ from .scene import IntegratorOptions, Scene
 Progress = Callable[[float], None]
 
 #: Above this many bytes of serialised right-hand sides (:meth:`Model.size`), compile in compact
-#: mode. The bundled scenes stay below it (0.005–0.17 MB, 0.6–10 s cold compiles); the figure
-#: is provisional until compile cost against scene size is measured.
-COMPACT_THRESHOLD = 1_000_000
+#: mode. Measured (validation/BENCHMARKS.md, "setup", four families): non-compact compile time
+#: grows like size^1.16 and reaches ~10 s at ~140 kB, while compact mode compiles in 0.2–1.5 s
+#: and its step cost falls from 1.4–2.5× (below 100 kB) to 0.9–1.4× (above 200 kB).
+COMPACT_THRESHOLD = 140_000
+
+
+def use_compact_mode(model: Model, options: IntegratorOptions) -> bool:
+    """Whether ``model`` is compiled in compact mode under ``options``.
+
+    The scene's ``integrator.compact_mode`` decides when given; "auto" chooses compact mode
+    for extended precisions (non-compact real128 code took 8–14 s to compile where compact
+    took 0.7–0.9 s, at the same step cost; MPFR code is larger still), for models that ask
+    for it (:attr:`Model.compact`), and above :data:`COMPACT_THRESHOLD`.
+    """
+    if options.compact_mode is not None:
+        return options.compact_mode
+    return options.precision.kind != "double" or model.compact or model.size() > COMPACT_THRESHOLD
 
 
 @dataclass
@@ -65,11 +79,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
         return hit, True
     t0 = time.perf_counter()
     prec = options.precision
-    compact = options.compact_mode
-    if compact is None:
-        # MPFR code is large per operation: without compact mode even a small system takes
-        # minutes to compile, while compact mode costs it little at run time.
-        compact = prec.kind == "real" or model.compact or model.size() > COMPACT_THRESHOLD
+    compact = use_compact_mode(model, options)
     kw = prec.heyoka_kwargs
     ev_kw = {"fp_type": kw["fp_type"]} if kw else {}
     nt_events = [

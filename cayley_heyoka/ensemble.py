@@ -307,19 +307,10 @@ def _initial_states(values: Any, names: Sequence[str], prec: Precision) -> np.nd
     return array
 
 
-def _compact(model: Model, options: IntegratorOptions) -> bool:
-    """The engine's choice of code model (engine.compile_model), for the batch integrator."""
-    if options.compact_mode is not None:
-        return options.compact_mode
-    return (
-        options.precision.kind == "real" or model.compact or model.size() > engine.COMPACT_THRESHOLD
-    )
-
-
 def _batch_template(model: Model, options: IntegratorOptions) -> tuple[Any, float]:
     """A compiled batch integrator for the model's structure (cached like the engine's)."""
     size = hy.recommended_simd_size()
-    compact = _compact(model, options)
+    compact = engine.use_compact_mode(model, options)
     key = hashlib.sha256(
         "\n".join(
             [

@@ -1,0 +1,33 @@
+"""The benchmark harness runs: a smoke run of every section of validation/BENCHMARKS.md.
+
+Benchmarks are measurements, not tests: nothing here judges a time. This only checks that
+``python validation/benchmarks.py --quick`` writes every section with its tables and plots, so
+that the one command that regenerates the document keeps working. Peers that are not
+installed (scipy, REBOUND) are reported by the harness as such.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+VALIDATION = Path(__file__).resolve().parents[2] / "validation"
+sys.path.insert(0, str(VALIDATION))
+
+import benchmarks  # noqa: E402
+from report_sections import markers  # noqa: E402
+
+
+def test_quick_run_writes_every_section(tmp_path):
+    out = tmp_path / "BENCHMARKS.md"
+    assert benchmarks.main(["--quick", "--out", str(out)]) == 0
+    text = out.read_text()
+    for name in ("header", *benchmarks.SECTIONS):
+        start, end = markers(name)
+        assert start in text and end in text, name
+        body = text[text.index(start) : text.index(end)]
+        if name != "header":
+            assert re.search(r"^\|.*\d.*\|$", body, re.M), f"{name}: no table with numbers"
+    for link in re.findall(r"\]\((figures/[^)]+\.png)\)", text):
+        assert (tmp_path / link).is_file(), link
