@@ -13,6 +13,7 @@ from __future__ import annotations
 from importlib import metadata as _metadata
 
 from .engine import clear_cache, compile_model, run
+from .ensemble import EnsembleError, EnsembleResult, propagate_ensemble
 from .errors import IntegrationError, SceneError
 from .precision import Precision
 from .result import EventLog, Result
@@ -30,6 +31,8 @@ def load_result(path: str) -> Result:
 
 
 __all__ = [
+    "EnsembleError",
+    "EnsembleResult",
     "EventLog",
     "IntegrationError",
     "Precision",
@@ -40,5 +43,6 @@ __all__ = [
     "compile_model",
     "load_result",
     "load_scene",
+    "propagate_ensemble",
     "run",
 ]
