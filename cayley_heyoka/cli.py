@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from importlib import import_module
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,9 @@ from .engine import run
 from .errors import IntegrationError, SceneError
 from .result import Result
 from .scene import load_scene
+
+#: Modules that each add one subcommand through ``add_command(subparsers)``.
+WORKFLOW_COMMANDS: tuple[str, ...] = ()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -34,8 +38,14 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_check.add_argument("scene", type=Path, help="scene TOML file")
     p_check.add_argument("--out", type=Path, help="write the check's rows and series to HDF5")
+    # The workflows register their own subcommands (each sets ``handler``); their modules
+    # import heyoka, h5py or matplotlib only when the command runs.
+    for name in WORKFLOW_COMMANDS:
+        import_module(f".{name}", __package__).add_command(sub)
     args = parser.parse_args(argv)
 
+    if getattr(args, "handler", None) is not None:
+        return args.handler(args)
     if args.command == "info":
         print(summary(Result.load(args.result)))
         return 0

@@ -203,7 +203,7 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     state = np.concatenate(states) if states else np.empty((0, len(model.system)))
     pars = np.array(pars_rows) if pars_rows else np.empty((0, len(model.pars)))
     times = grid[: len(state)]
-    values = _evaluate(compiled.evaluator, model, state, pars, times, prec)
+    values = evaluate_outputs(compiled, model, state, pars, times, prec)
     result = Result(
         t=times,
         variables={k: values[k] for k in model.outputs},
@@ -295,14 +295,35 @@ def _flat_outputs(model: Model) -> list[tuple[str, Any]]:
     return flat
 
 
-def _evaluate(
-    evaluator: Any,
+def evaluate_outputs(
+    compiled: Compiled,
     model: Model,
     state: np.ndarray,
     pars: np.ndarray,
     times: np.ndarray,
     prec: Precision,
 ) -> dict[str, np.ndarray]:
+    """The model's outputs and monitors from states recorded by ``compiled``'s integrator.
+
+    Parameters
+    ----------
+    compiled
+        What :func:`compile_model` returned for ``model``.
+    state
+        States, shape ``(n, len(model.system))``, one row per time.
+    pars
+        The whole parameter vector at each time, shape ``(n, len(model.pars))``.
+    times
+        The ``n`` times.
+    prec
+        The precision of the arrays.
+
+    Returns
+    -------
+    dict
+        Each output and monitor by name: shape ``(n,)``, or ``(n, k)`` for a k-vector monitor.
+    """
+    evaluator = compiled.evaluator
     n = len(state)
     if n == 0:
         rows = np.empty((len(_flat_outputs(model)), 0))
