@@ -128,105 +128,231 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
         Every output time, or, if the run stops early, an :class:`IntegrationError` is raised
         whose ``result`` holds what was computed up to the failure.
     """
-    wall0 = time.perf_counter()
-    model = FAMILIES[scene.family].build(scene)
-    prec = scene.integrator.precision
-    compiled, cached = compile_model(model, scene.integrator)
-    ta = copy.deepcopy(compiled.integrator)
-    grid = scene.output.time_grid(prec)
-    ta.time = grid[0]
-    ta.state[:] = prec.array(model.initial_state)
-    # The whole parameter vector (outputs may use parameters the equations do not); the
-    # integrator holds its leading part, copied back whenever a handler changes it.
-    pars = prec.array(model.pars.values)
-    held = len(ta.pars)
-    ta.pars[:] = pars[:held]
-
-    callback = _ProgressCallback(progress) if progress else None
-    # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
-    limit = {}
-    if scene.integrator.max_step is not None:
-        limit["max_delta_t"] = prec.number(scene.integrator.max_step)
-    states, pars_rows = [], []
-    counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
-    status, message = 0, "every output time was reached"
-    stopped_at = None
-    # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
-    # ends a step there. So after a terminal event the grid is resumed from the current time;
-    # propagate_until to the next output would end a step at each output reached after an
-    # event — a rounding kick each, and a trajectory that depends on the output grid. A call
-    # costs O(its points): one after an event covers twice the outputs of the last stretch
-    # between events (the next event usually comes first), doubling while none interrupts it.
-    span, since_event = len(grid), 0
-    i = 0
-    while i < len(grid):
-        resume = ta.time != grid[i]
-        points = grid[i : i + span]
-        if resume:
-            points = _starting_at(prec, ta.time, points)
-        res = ta.propagate_grid(points, callback=callback, **limit)
-        outcome, out = res[0], res[-1]
-        if resume:
-            out = out[1:]  # the current time: not an output time, or recorded already
-        counters["steps"] += res[3]
-        states.append(out)
-        # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
-        pars_rows += [pars.copy() for _ in range(len(out))]
-        i += len(out)
-        since_event += len(out)
-        code = int(outcome)
-        if outcome == hy.taylor_outcome.time_limit:
-            span = min(2 * span, len(grid))
-            continue
-        span, since_event = 2 * since_event + _RESUME_SPAN, 0
-        if -len(model.terminal) <= code <= -1:
-            spec = model.terminal[-code - 1]
-            stop = spec.handle(ta, pars)
-            ta.pars[:] = pars[:held]
-            counters[spec.counter] += 1
-            if stop is not None:
-                status, message = -1, stop
-                if spec.records is not None:
-                    stopped_at = (spec.records, ta.time, spec.direction)
-                break
-            ta.reset_cooldowns()
-            continue
-        status = -1
-        if outcome == hy.taylor_outcome.err_nf_state:
-            message = f"the state became non-finite after t = {ta.time}; results kept up to there"
-        elif outcome == hy.taylor_outcome.cb_stop:
-            message = f"stopped by the progress callback at t = {ta.time}"
-        else:
-            message = f"stopped at t = {ta.time} with outcome {outcome}"
-        break
-
-    state = np.concatenate(states) if states else np.empty((0, len(model.system)))
-    pars = np.array(pars_rows) if pars_rows else np.empty((0, len(model.pars)))
-    times = grid[: len(state)]
-    values = evaluate_outputs(compiled, model, state, pars, times, prec)
-    result = Result(
-        t=times,
-        variables={k: values[k] for k in model.outputs},
-        monitors={k: values[k] for k in model.monitors},
-        conserved=model.conserved,
-        events=_event_logs(model, ta, prec, stopped_at),
-        precision=prec,
-        status=status,
-        message=message,
-        counters=counters,
-        scene=scene.to_dict(),
-        metadata={
-            **versions(),
-            "wall_seconds": time.perf_counter() - wall0,
-            "compile_seconds": 0.0 if cached else compiled.compile_seconds,
-            "compiled_from_cache": cached,
-            "order": int(ta.order),
-            "tolerance": str(ta.tol),
-        },
-    )
-    if status != 0:
-        raise IntegrationError(message, result)
+    propagation = Propagation(scene, progress)
+    propagation.advance()
+    result = propagation.result()
+    if result.status != 0:
+        raise IntegrationError(result.message, result)
     return result
+
+
+class Propagation:
+    """One scene's integration, advanced stretch by stretch; :func:`run` is one stretch.
+
+    A run that must survive interruption (``cayley-heyoka reference``) advances to fixed
+    boundary times, saves :meth:`snapshot` after each and, after an interruption, continues a
+    new ``Propagation`` from the last one with :meth:`restore`. A boundary ends a step (it is
+    the last point of a ``propagate_grid`` call), so the trajectory depends on the boundaries,
+    never on whether the run was interrupted: a resumed run ends with the same bits.
+
+    Parameters
+    ----------
+    scene
+        A validated scene.
+    progress
+        Called with the current time after each step.
+    keep
+        Keep the recorded states in memory for :meth:`result` (a caller that stores each
+        stretch's rows itself passes False and gives them back to :meth:`result`).
+    """
+
+    def __init__(self, scene: Scene, progress: Progress | None = None, keep: bool = True) -> None:
+        self._wall0 = time.perf_counter()
+        self.scene = scene
+        self.model = model = FAMILIES[scene.family].build(scene)
+        self.precision = prec = scene.integrator.precision
+        self.compiled, self._cached = compile_model(model, scene.integrator)
+        self._ta = ta = copy.deepcopy(self.compiled.integrator)
+        self.grid = scene.output.time_grid(prec)
+        ta.time = self.grid[0]
+        ta.state[:] = prec.array(model.initial_state)
+        # The whole parameter vector (outputs may use parameters the equations do not); the
+        # integrator holds its leading part, copied back whenever a handler changes it.
+        self._pars = prec.array(model.pars.values)
+        self._held = len(ta.pars)
+        ta.pars[:] = self._pars[: self._held]
+        self._callback = _ProgressCallback(progress) if progress else None
+        # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
+        self._limit = {}
+        if scene.integrator.max_step is not None:
+            self._limit["max_delta_t"] = prec.number(scene.integrator.max_step)
+        self._keep = keep
+        self._states: list[np.ndarray] = []
+        self._pars_rows: list[np.ndarray] = []
+        self.counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
+        self.status, self.message = 0, "every output time was reached"
+        self._stopped_at: tuple | None = None
+        #: Output times recorded so far.
+        self.done = 0
+        self._span, self._since_event = len(self.grid), 0
+
+    @property
+    def time(self) -> Any:
+        """The integrator's current time."""
+        return self._ta.time
+
+    @property
+    def finished(self) -> bool:
+        """Whether every output time is recorded or the run has stopped."""
+        return self.status != 0 or self.done == len(self.grid)
+
+    def advance(self, until: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """Propagate through the output times up to ``until`` and end exactly there.
+
+        Parameters
+        ----------
+        until
+            A time in the run's precision, at most the last output time; None: to the end.
+
+        Returns
+        -------
+        states, pars
+            The rows recorded by this call: states, and the whole parameter vector at each.
+        """
+        ta, prec, grid, model = self._ta, self.precision, self.grid, self.model
+        if until is None:
+            until = grid[-1]
+        end = int(np.searchsorted(grid, until, side="right"))
+        states, pars_rows = [], []
+        # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
+        # ends a step there. So after a terminal event the grid is resumed from the current
+        # time; propagate_until to the next output would end a step at each output reached
+        # after an event — a rounding kick each, and a trajectory that depends on the output
+        # grid. A call costs O(its points): one after an event covers twice the outputs of the
+        # last stretch between events (the next event usually comes first), doubling while
+        # none interrupts it.
+        while self.status == 0 and (self.done < end or ta.time < until):
+            i = self.done
+            points = grid[i : min(i + self._span, end)]
+            outputs = len(points)
+            if i + self._span >= end and (outputs == 0 or points[-1] != until):
+                points = _ending_at(prec, points, until)  # a boundary, not an output
+            resume = ta.time != points[0]
+            if resume:
+                points = _starting_at(prec, ta.time, points)
+            res = ta.propagate_grid(points, callback=self._callback, **self._limit)
+            outcome, out = res[0], res[-1]
+            out = out[int(resume) : int(resume) + outputs]
+            self.counters["steps"] += res[3]
+            states.append(out)
+            # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
+            pars_rows += [self._pars.copy() for _ in range(len(out))]
+            self.done += len(out)
+            self._since_event += len(out)
+            code = int(outcome)
+            if outcome == hy.taylor_outcome.time_limit:
+                self._span = min(2 * self._span, len(grid))
+                continue
+            self._span, self._since_event = 2 * self._since_event + _RESUME_SPAN, 0
+            if -len(model.terminal) <= code <= -1:
+                self._terminal(model.terminal[-code - 1])
+                continue
+            self.status = -1
+            if outcome == hy.taylor_outcome.err_nf_state:
+                self.message = (
+                    f"the state became non-finite after t = {ta.time}; results kept up to there"
+                )
+            elif outcome == hy.taylor_outcome.cb_stop:
+                self.message = f"stopped by the progress callback at t = {ta.time}"
+            else:
+                self.message = f"stopped at t = {ta.time} with outcome {outcome}"
+        width = (len(model.system), len(model.pars))
+        state = np.concatenate(states) if states else np.empty((0, width[0]))
+        pars = np.array(pars_rows) if pars_rows else np.empty((0, width[1]))
+        if self._keep:
+            self._states.append(state)
+            self._pars_rows.append(pars)
+        return state, pars
+
+    def _terminal(self, spec: Any) -> None:
+        ta = self._ta
+        stop = spec.handle(ta, self._pars)
+        ta.pars[:] = self._pars[: self._held]
+        self.counters[spec.counter] += 1
+        if stop is not None:
+            self.status, self.message = -1, stop
+            if spec.records is not None:
+                self._stopped_at = (spec.records, ta.time, spec.direction)
+            return
+        ta.reset_cooldowns()
+
+    def snapshot(self) -> dict[str, Any]:
+        """Everything :meth:`restore` needs to continue this run, as JSON-ready values.
+
+        Numbers are decimal text that loads back bit-for-bit; the time is heyoka's
+        double-length time (its two parts).
+        """
+        if self.status != 0:
+            raise ValueError(f"a stopped run cannot be continued: {self.message}")
+        prec, ta = self.precision, self._ta
+        return {
+            "done": self.done,
+            "span": self._span,
+            "since_event": self._since_event,
+            "time": list(prec.to_text(prec.array(ta.dtime))),
+            "state": list(prec.to_text(ta.state)),
+            "pars": list(prec.to_text(self._pars)),
+            "counters": dict(self.counters),
+            "events": [
+                [list(prec.to_text(prec.array(ev.callback.times))), list(ev.callback.directions)]
+                for ev in (ta.nt_events if self.model.events else [])
+            ],
+            "handlers": [
+                spec.handle.checkpoint() if hasattr(spec.handle, "checkpoint") else None
+                for spec in self.model.terminal
+            ],
+        }
+
+    def restore(self, snapshot: dict[str, Any]) -> None:
+        """Continue from a :meth:`snapshot` of a run of the same scene."""
+        prec, ta = self.precision, self._ta
+        self.done, self._span = int(snapshot["done"]), int(snapshot["span"])
+        self._since_event = int(snapshot["since_event"])
+        hi, lo = prec.from_text(snapshot["time"])
+        ta.dtime = (hi, lo)
+        ta.state[:] = prec.from_text(snapshot["state"])
+        self._pars = prec.from_text(snapshot["pars"])
+        ta.pars[:] = self._pars[: self._held]
+        self.counters = {k: int(v) for k, v in snapshot["counters"].items()}
+        recorded = ta.nt_events if self.model.events else []
+        if len(snapshot["events"]) != len(recorded):
+            raise ValueError("the snapshot is of a scene with other events")
+        for spec, value in zip(self.model.terminal, snapshot["handlers"], strict=True):
+            if value is not None:
+                spec.handle.resume(value)
+        for ev, (times, directions) in zip(recorded, snapshot["events"], strict=True):
+            ev.callback.times = list(prec.from_text(times))
+            ev.callback.directions = [int(d) for d in directions]
+
+    def result(self, states: np.ndarray | None = None, pars: np.ndarray | None = None) -> Result:
+        """The result of what has been recorded (``states``/``pars``: every row, if not kept)."""
+        model, prec = self.model, self.precision
+        if states is None:
+            width = (len(model.system), len(model.pars))
+            states = np.concatenate(self._states) if self._states else np.empty((0, width[0]))
+            pars = np.concatenate(self._pars_rows) if self._pars_rows else np.empty((0, width[1]))
+        times = self.grid[: len(states)]
+        values = evaluate_outputs(self.compiled, model, states, pars, times, prec)
+        return Result(
+            t=times,
+            variables={k: values[k] for k in model.outputs},
+            monitors={k: values[k] for k in model.monitors},
+            conserved=model.conserved,
+            events=_event_logs(model, self._ta, prec, self._stopped_at),
+            precision=prec,
+            status=self.status,
+            message=self.message,
+            counters=dict(self.counters),
+            scene=self.scene.to_dict(),
+            metadata={
+                **versions(),
+                "wall_seconds": time.perf_counter() - self._wall0,
+                "compile_seconds": 0.0 if self._cached else self.compiled.compile_seconds,
+                "compiled_from_cache": self._cached,
+                "order": int(self._ta.order),
+                "tolerance": str(self._ta.tol),
+            },
+        )
 
 
 # ---------------------------------------------------------------------- internals
@@ -240,6 +366,13 @@ def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:
         return np.concatenate(([t], points))
     # Through Python objects: numpy's copies of heyoka's multiprecision dtype alias limbs.
     return prec.array([t, *points])
+
+
+def _ending_at(prec: Precision, points: np.ndarray, t: Any) -> np.ndarray:
+    """``points`` followed by ``t``."""
+    if prec.kind == "double":
+        return np.concatenate((points, [t]))
+    return prec.array([*points, t])
 
 
 class _Recorder:

@@ -80,6 +80,10 @@ class TerminalSpec:
     its occurrences in :attr:`Result.counters`. ``records``, if given, is the recorded event
     this stop stands for: the stop is logged as its occurrence (the same zero found twice, by
     two root searches, could otherwise land either side of the stop).
+
+    A handler that keeps state of its own between calls (not in ``pars``) exposes it as
+    ``checkpoint() -> JSON value`` and ``resume(value)``, so that an interrupted run continues
+    exactly (:meth:`cayley_heyoka.engine.Propagation.snapshot`).
     """
 
     expression: Expr

@@ -78,6 +78,14 @@ class Revolutions:
         pars[self._offset_index] = self.precision.number(self._offset_text())
         pars[self._phase_index] = self.precision.number(self._phase_text())
 
+    def checkpoint(self) -> int:
+        """The revolutions completed (the engine's snapshot of a run carries it)."""
+        return self.k
+
+    def resume(self, k: int) -> None:
+        """Continue after ``k`` revolutions (the parameters come back with the snapshot)."""
+        self.k = int(k)
+
     def _offset_text(self) -> str:
         with mpmath.workdps(self._dps):
             return self._text(self.k * self._C)

@@ -1,0 +1,646 @@
+"""Certified reference solutions: ``cayley-heyoka reference SCENE.toml --digits 30 --out REF.h5``.
+
+A reference solution is a scene's trajectory at its output times, written with an error
+certificate: the estimated absolute error of every variable at every time. How it is made:
+
+1. **Precision.** The smallest of double, quad (``real128``) or MPFR ``real`` whose epsilon
+   leaves :data:`GUARD_DIGITS` digits beyond the requested ones; the tolerance is that
+   precision's epsilon (heyoka's default), unless given.
+2. **Certificate.** Where the scene has a closed form — the torque-free body
+   (:class:`~cayley_heyoka.reference.FreeRigidBody`, also its invariable-plane crossings) and
+   Hamilton's projectile (:func:`~cayley_heyoka.reference.projectile_solution`) — the run is
+   compared with it, evaluated in mpmath with its own certified error. Otherwise the scene is
+   integrated again at a higher precision (its epsilon as tolerance), independent in both
+   round-off and truncation; the more precise run is written and the difference of the two is
+   its certificate (an estimate of the less precise run's error, so a conservative one of the
+   written run's).
+3. **Escalation.** If the certificate does not reach the requested digits (scaled errors:
+   absolute where |x| ≤ 1, relative above), the precisions are raised and the run repeated, up
+   to ``max_bits``; past that the file is written marked uncertified and the command exits 1.
+
+Runs go through :class:`~cayley_heyoka.checkpoint.CheckpointedRun` in a work directory beside
+the output (``REF.h5.work``): an interrupted command, run again, continues where it stopped
+and writes the same bits as an uninterrupted one. The work directory is removed once the file
+is written. The file is an ordinary result file (``cayley_heyoka.load_result``) with a
+``certificate`` group and the metadata needed to reproduce it (``metadata["reference"]``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import platform
+import shutil
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import SceneError
+from .precision import Precision
+from .scene import Scene, load_scene
+
+#: Digits of working precision beyond those requested: room for the error a long run builds.
+GUARD_DIGITS = 4
+#: Largest precision the escalation goes to, unless told otherwise.
+MAX_BITS = 1024
+#: Stretches between checkpoints (each ends a step; the count is part of what the file records).
+STRETCHES = 64
+_BITS_PER_DIGIT = math.log2(10)
+#: How the certificate is made.
+METHODS = ("auto", "closed-form", "two-precisions")
+
+
+def precision_for(digits: float) -> Precision:
+    """The cheapest precision with ``digits`` significant decimal digits."""
+    bits = math.ceil(digits * _BITS_PER_DIGIT) + 1
+    if bits <= 53:
+        return Precision("double")
+    if bits <= 113:
+        return Precision("quad")
+    return Precision("real", 32 * math.ceil(bits / 32))
+
+
+def next_precision(prec: Precision) -> Precision:
+    """The next rung of the ladder: at least 32 more bits, or a quarter more."""
+    if prec.kind == "double":
+        return Precision("quad")
+    bits = prec.bits + max(32, prec.bits // 4)
+    return Precision("real", 32 * math.ceil(bits / 32))
+
+
+@dataclass
+class Certificate:
+    """The error bound of a reference solution.
+
+    Attributes
+    ----------
+    method
+        ``"closed form"`` or ``"two precisions"``.
+    compared_with
+        What the solution was compared with (the closed form's name, or the other precision).
+    errors
+        Estimated absolute error of each variable at each output time.
+    event_errors
+        Estimated absolute error of each recorded event's times.
+    scaled
+        The largest error, absolute where |value| ≤ 1 and relative above.
+    worst
+        Where the largest scaled error is: ``(variable, time)``.
+    """
+
+    method: str
+    compared_with: str
+    errors: dict[str, np.ndarray]
+    event_errors: dict[str, np.ndarray] = field(default_factory=dict)
+    scaled: float = 0.0
+    worst: tuple[str, float] = ("", 0.0)
+
+    def digits(self) -> float:
+        """Decimal digits certified: -log10 of the largest scaled error."""
+        return math.inf if self.scaled == 0 else -math.log10(self.scaled)
+
+
+@dataclass
+class ReferenceOutcome:
+    """What :func:`generate_reference` wrote."""
+
+    path: Path
+    certified: bool
+    certificate: Certificate
+    precision: Precision
+    attempts: list[dict[str, Any]]
+
+
+def generate_reference(
+    scene: Scene,
+    digits: int,
+    out: str | Path,
+    *,
+    precision: Precision | None = None,
+    tolerance: str | None = None,
+    max_bits: int = MAX_BITS,
+    stretches: int = STRETCHES,
+    workdir: str | Path | None = None,
+    keep_work: bool = False,
+    method: str = "auto",
+    progress: Any = None,
+    report: Any = None,
+    command: list[str] | None = None,
+) -> ReferenceOutcome:
+    """Integrate ``scene`` to ``digits`` certified digits and write the reference file.
+
+    Parameters
+    ----------
+    scene
+        The scene (its ``[integrator]`` precision and tolerance are replaced).
+    digits
+        Significant decimal digits to certify (scaled: absolute for |x| ≤ 1).
+    out
+        The HDF5 file to write.
+    precision
+        Start from this precision instead of the one chosen for ``digits``.
+    tolerance
+        heyoka's tolerance for the first run (decimal text); default: its precision's epsilon.
+    max_bits
+        Give up raising the precision beyond this many bits.
+    stretches
+        Checkpoints per run (see :class:`~cayley_heyoka.checkpoint.CheckpointedRun`).
+    workdir
+        Where runs are checkpointed; default ``OUT.work`` beside ``out``.
+    keep_work
+        Keep the work directory after the file is written.
+    method
+        ``"auto"`` (the closed form where there is one), ``"closed-form"`` or
+        ``"two-precisions"``.
+    progress
+        ``progress(run_label, time)`` after each step, or None.
+    report
+        ``report(text)`` for one-line accounts of the plan and each run, or None.
+    command
+        The command line, for the file's metadata.
+
+    Returns
+    -------
+    ReferenceOutcome
+        ``certified`` is False when ``max_bits`` was reached first (the file is still written,
+        marked so).
+    """
+    if isinstance(digits, bool) or not isinstance(digits, int) or digits < 1:
+        raise ValueError(f"digits must be an integer >= 1, got {digits!r}")
+    if max_bits < 53:
+        raise ValueError(f"max_bits must be >= 53, got {max_bits}")
+    if tolerance is not None and not float(tolerance) > 0:
+        raise ValueError(f"tolerance must be > 0, got {tolerance}")
+    out = Path(out)
+    workdir = Path(workdir) if workdir is not None else out.with_name(out.name + ".work")
+    say = report or (lambda text: None)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    closed = closed_form_for(scene) if method != "two-precisions" else None
+    if method == "closed-form" and closed is None:
+        raise ValueError(
+            "method 'closed-form': this scene has none here (a torque-free body without user "
+            "events, or Hamilton's projectile in canonical form); use 'two-precisions'"
+        )
+    first = precision or precision_for(digits + GUARD_DIGITS)
+    if first.bits > max_bits:
+        raise ValueError(f"max_bits ({max_bits}) is below the precision needed ({first.name})")
+    say(
+        f"plan: {digits} digits; {first.name} first; certificate "
+        + (f"from the closed form ({closed.name})" if closed else "from a second precision")
+    )
+    started = time.perf_counter()
+    attempts: list[dict[str, Any]] = []
+    runs: dict[str, Any] = {}
+
+    def integrate(prec: Precision, tol: str | None) -> Any:
+        key = f"{prec.name}:{tol}"
+        if key not in runs:
+            from .checkpoint import CheckpointedRun
+
+            variant = _with_precision(scene, prec, tol)
+            where = workdir / f"run-{prec.name}" if tol is None else workdir / f"run-{prec.name}-t"
+            job = CheckpointedRun(variant, where, stretches, _labelled(progress, prec.name))
+            resumed = job.completed()
+            t0 = time.perf_counter()
+            result = job.run()
+            note = f" (resumed after {resumed} of {stretches} stretches)" if resumed else ""
+            say(
+                f"run {prec.name}: {result.counters.get('steps', 0)} steps, "
+                f"{time.perf_counter() - t0:.2f} s{note}"
+            )
+            if not result.success:
+                raise RuntimeError(f"the {prec.name} run stopped: {result.message}")
+            runs[key] = (result, where)
+        return runs[key][0]
+
+    prec, tol = first, tolerance
+    while True:
+        result = integrate(prec, tol)
+        if closed is not None:
+            written = result
+            cert = closed.certificate(result, digits)
+        else:
+            check = next_precision(prec)
+            if check.bits > max_bits:
+                # No higher rung left to compare with: the last comparison stands.
+                break
+            written = integrate(check, None)
+            cert = difference_certificate(written, result)
+        attempts.append(
+            {
+                "precision": prec.name,
+                "tolerance": tol or "epsilon",
+                "compared_with": cert.compared_with,
+                "scaled_error": cert.scaled,
+                "worst": list(cert.worst),
+            }
+        )
+        say(
+            f"certificate: {cert.digits():.1f} digits (largest scaled error {cert.scaled:.2e} "
+            f"in {cert.worst[0]} at t = {cert.worst[1]:.6g})"
+        )
+        if cert.scaled <= 10.0**-digits:
+            break
+        # Up one rung; with two precisions the more precise run becomes the one checked.
+        prec, tol = (next_precision(prec) if closed else written.precision), None
+        if (next_precision(prec) if closed is None else prec).bits > max_bits:
+            break
+        say(f"not enough: raising the precision to {prec.name}")
+    if not attempts:
+        raise ValueError(f"max_bits ({max_bits}) leaves no higher precision to compare with")
+    certified = attempts[-1]["scaled_error"] <= 10.0**-digits
+    metadata = {
+        "command": command or [],
+        "digits": digits,
+        "certified": certified,
+        "precision": written.precision.name,
+        "stretches": stretches,
+        "attempts": attempts,
+        "guard_digits": GUARD_DIGITS,
+        "max_bits": max_bits,
+        "wall_seconds": time.perf_counter() - started,
+        "scene_sha256": hashlib.sha256(
+            json.dumps(scene.to_dict(), sort_keys=True).encode()
+        ).hexdigest(),
+        "environment": _environment(),
+    }
+    _write(out, written, cert, digits, certified, metadata)
+    if not keep_work:
+        shutil.rmtree(workdir, ignore_errors=True)
+    return ReferenceOutcome(out, certified, cert, written.precision, attempts)
+
+
+# ---------------------------------------------------------------------- certificates
+def _scaled(values: np.ndarray, errors: np.ndarray) -> np.ndarray:
+    mag = np.abs(np.asarray(values, dtype=float))
+    return errors / np.maximum(mag, 1.0)
+
+
+def _worst(cert: Certificate, values: dict[str, np.ndarray], t: np.ndarray) -> Certificate:
+    best = (0.0, "", 0.0)
+    for name, err in cert.errors.items():
+        s = _scaled(values[name], err)
+        if s.size and np.max(s) > best[0]:
+            k = int(np.argmax(s))
+            best = (float(s[k]), name, float(t[k]))
+    for name, err in cert.event_errors.items():
+        if err.size and np.max(err) > best[0]:
+            best = (float(np.max(err)), f"event {name}", math.nan)
+    cert.scaled, cert.worst = best[0], (best[1], best[2])
+    return cert
+
+
+def difference_certificate(written: Any, other: Any) -> Certificate:
+    """The certificate of ``written`` from a less precise run ``other`` of the same scene."""
+    import mpmath
+
+    errors = {}
+    with mpmath.workdps(written.precision.dps + 5):
+        for name, values in written.variables.items():
+            errors[name] = _abs_difference(values, other.variables[name])
+        event_errors = {}
+        for name, log in written.events.items():
+            theirs = other.events.get(name)
+            if theirs is None or len(theirs) != len(log) or list(theirs.label) != list(log.label):
+                raise RuntimeError(
+                    f"event {name!r}: {len(log)} occurrences in {written.precision.name}, "
+                    f"{0 if theirs is None else len(theirs)} in {other.precision.name} — the "
+                    "runs disagree on an event (one grazing zero?): no certificate"
+                )
+            event_errors[name] = _abs_difference(log.time, theirs.time)
+    cert = Certificate("two precisions", other.precision.name, errors, event_errors)
+    return _worst(cert, written.variables, np.asarray(written.t, dtype=float))
+
+
+def _abs_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """|a - b| as float64, the subtraction done in mpmath (exact for both operands' types)."""
+    import mpmath
+
+    fa, fb = np.ravel(a), np.ravel(b)
+    out = np.array(
+        [float(abs(mpmath.mpf(str(x)) - mpmath.mpf(str(y)))) for x, y in zip(fa, fb, strict=True)]
+    )
+    return out.reshape(np.shape(a))
+
+
+class _ClosedForm:
+    """A closed form that a scene's run can be compared with."""
+
+    name = ""
+
+    def certificate(self, result: Any, digits: int) -> Certificate:
+        raise NotImplementedError
+
+
+def closed_form_for(scene: Scene) -> _ClosedForm | None:
+    """The closed form of ``scene``'s motion, or None when it has none here."""
+    if scene.family == "rotation" and scene.model.torque_free and not scene.events:
+        return _FreeBody(scene)
+    if scene.family == "hamiltonian" and scene.model.model == "projectile":
+        if scene.model.formulation == "canonical" and not scene.events:
+            return _Projectile(scene)
+    return None
+
+
+class _FreeBody(_ClosedForm):
+    name = "FreeRigidBody, Jacobi elliptic functions"
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+
+    def certificate(self, result: Any, digits: int) -> Certificate:
+        import mpmath
+
+        from .rotation.closed_form import FreeRigidBody
+
+        body = self.scene.model
+        dps = digits + 10
+        # The attitude as the run starts it (a matrix or an unnormalised quaternion included),
+        # computed well beyond the digits asked for.
+        quaternion = body.initial_quaternion(Precision("real", int(dps * _BITS_PER_DIGIT) + 64))
+        exact = FreeRigidBody(
+            body.inertia, body.rates, attitude=[str(c) for c in quaternion], dps=dps
+        )
+        t = result.t
+        names = [n for n in ("p", "q", "r", "qw", "qx", "qy", "qz") if n in result.variables]
+        has_rodrigues = "lambda" in result.variables
+        cols: dict[str, list[float]] = {
+            n: [] for n in names + (["lambda", "mu", "nu"] if has_rodrigues else [])
+        }
+        with mpmath.workdps(dps + 10):
+            t0 = mpmath.mpf(str(t[0]))
+            for k in range(len(t)):
+                s = exact.at(mpmath.mpf(str(t[k])) - t0)
+                bound = max(s.errors.values())
+                got = {n: mpmath.mpf(str(result.variables[n][k])) for n in cols}
+                exact_q = list(s.quaternion)
+                if "qw" in got:
+                    # q and −q are one attitude: compare with the sign the run took.
+                    ours = [got["qw"], got["qx"], got["qy"], got["qz"]]
+                    if sum(a * b for a, b in zip(ours, exact_q, strict=True)) < 0:
+                        exact_q = [-c for c in exact_q]
+                want = {"p": s.p, "q": s.q, "r": s.r}
+                want.update(zip(("qw", "qx", "qy", "qz"), exact_q, strict=True))
+                if has_rodrigues:
+                    w = exact_q[0]
+                    want.update(
+                        {"lambda": exact_q[1] / w, "mu": exact_q[2] / w, "nu": exact_q[3] / w}
+                    )
+                for n in cols:
+                    err = abs(got[n] - want[n]) + bound * max(1, abs(want[n]))
+                    cols[n].append(float(err))
+            event_errors = {}
+            log = result.events.get("invariable_plane")
+            if log is not None:
+                event_errors["invariable_plane"] = self._crossings(exact, log, t, t0)
+        errors = {n: np.array(v) for n, v in cols.items()}
+        cert = Certificate("closed form", self.name, errors, event_errors)
+        return _worst(cert, result.variables, np.asarray(t, dtype=float))
+
+    @staticmethod
+    def _crossings(exact: Any, log: Any, t: np.ndarray, t0: Any) -> np.ndarray:
+        import mpmath
+
+        span = mpmath.mpf(str(t[-1])) - t0
+        errors = []
+        for axis in ("x1", "y1", "z1"):
+            ours = [mpmath.mpf(str(x)) - t0 for x in log.where(axis)]
+            theirs = exact.crossing_times(axis, 0, span)
+            if len(ours) != len(theirs):
+                raise RuntimeError(
+                    f"invariable-plane crossings of {axis}: {len(ours)} recorded, "
+                    f"{len(theirs)} in the closed form — no certificate"
+                )
+            errors += [float(abs(a - c.time) + c.error) for a, c in zip(ours, theirs, strict=True)]
+        return np.array(errors)
+
+
+class _Projectile(_ClosedForm):
+    name = "Hamilton's projectile, (113.)-(114.), (120.)"
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+
+    def certificate(self, result: Any, digits: int) -> Certificate:
+        import mpmath
+
+        from .hamilton.projectile import projectile_solution
+
+        h = self.scene.model
+        c = h.constants
+        dps = digits + 10
+        t = result.t
+        names = [n for n in result.variables if n[:-1] in ("eta", "varpi") or n == "S"]
+        cols: dict[str, list[float]] = {n: [] for n in names}
+        with mpmath.workdps(dps + 10):
+            t0 = mpmath.mpf(str(t[0]))
+            for k in range(len(t)):
+                tk = mpmath.mpf(str(t[k])) - t0
+                s = projectile_solution(c["g"], c["mu"], c["nu"], h.eta, h.varpi, tk, dps=dps)
+                want = {f"eta{i + 1}": s.eta[i] for i in range(3)}
+                want.update({f"varpi{i + 1}": s.varpi[i] for i in range(3)})
+                want["S"] = s.S
+                for n in names:
+                    got = mpmath.mpf(str(result.variables[n][k]))
+                    bound = s.errors[n] * max(1, abs(want[n]))
+                    cols[n].append(float(abs(got - want[n]) + bound))
+        errors = {n: np.array(v) for n, v in cols.items()}
+        cert = Certificate("closed form", self.name, errors)
+        return _worst(cert, result.variables, np.asarray(t, dtype=float))
+
+
+# ---------------------------------------------------------------------- files
+def _with_precision(scene: Scene, prec: Precision, tolerance: str | None) -> Scene:
+    data = scene.to_dict()
+    integ = dict(data.get("integrator", {}))
+    integ["precision"] = prec.to_spec()
+    integ["tolerance"] = "auto" if tolerance is None else tolerance
+    data["integrator"] = integ
+    return Scene.from_dict(data)
+
+
+def _labelled(progress: Any, label: str) -> Any:
+    if progress is None:
+        return None
+    return lambda t: progress(label, t)
+
+
+def _environment() -> dict[str, str]:
+    import h5py
+    import mpmath
+
+    return {
+        "python": sys.version.split()[0],
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "mpmath": mpmath.__version__,
+        "h5py": h5py.__version__,
+    }
+
+
+def _write(
+    out: Path, result: Any, cert: Certificate, digits: int, certified: bool, meta: dict
+) -> None:
+    import h5py
+
+    result.metadata = {**result.metadata, "reference": meta}
+    tmp = out.with_name(out.name + ".tmp")
+    result.save(tmp)
+    with h5py.File(tmp, "a") as f:
+        g = f.create_group("certificate")
+        g.attrs["method"] = cert.method
+        g.attrs["compared_with"] = cert.compared_with
+        g.attrs["digits_requested"] = digits
+        g.attrs["digits_certified"] = cert.digits()
+        g.attrs["largest_scaled_error"] = cert.scaled
+        g.attrs["worst"] = json.dumps(list(cert.worst))
+        g.attrs["certified"] = certified
+        g.attrs["scaling"] = "absolute where |value| <= 1, relative above"
+        for name, err in cert.errors.items():
+            g.create_dataset(name, data=err)
+        ge = g.create_group("events")
+        for name, err in cert.event_errors.items():
+            ge.create_dataset(name, data=err)
+    os.replace(tmp, out)
+
+
+def read_certificate(path: str | Path) -> dict[str, Any]:
+    """The certificate of a reference file: its attributes, and errors by variable name."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        if "certificate" not in f:
+            raise ValueError(f"{path}: not a reference file (no certificate group)")
+        g = f["certificate"]
+        out: dict[str, Any] = dict(g.attrs)
+        out["errors"] = {k: g[k][()] for k in g if k != "events"}
+        out["event_errors"] = {k: g["events"][k][()] for k in g["events"]}
+    return out
+
+
+# ---------------------------------------------------------------------- command line
+def add_command(sub: Any) -> None:
+    """Register ``cayley-heyoka reference``."""
+    p = sub.add_parser(
+        "reference",
+        help="write a certified reference solution of a scene (resumable)",
+        description=(
+            "Integrate SCENE to DIGITS certified digits at its output times and write the "
+            "solution with its error certificate. Interrupted (Ctrl-C, or killed), the same "
+            "command continues from its last checkpoint and writes the same bits."
+        ),
+    )
+    p.add_argument("scene", type=Path, help="scene TOML file")
+    p.add_argument("--digits", type=int, required=True, help="decimal digits to certify")
+    p.add_argument("--out", type=Path, required=True, help="the HDF5 file to write")
+    p.add_argument(
+        "--precision", help="start from this precision: double, quad or a number of bits"
+    )
+    p.add_argument("--tolerance", help="heyoka's tolerance of the first run (default: epsilon)")
+    p.add_argument("--max-bits", type=int, default=MAX_BITS, help="stop raising precision here")
+    p.add_argument(
+        "--checkpoints", type=int, default=STRETCHES, help="checkpoints per run (default 64)"
+    )
+    p.add_argument(
+        "--certificate",
+        choices=METHODS,
+        default="auto",
+        help="closed-form (where there is one), two-precisions, or auto (the first that applies)",
+    )
+    p.add_argument("--keep-work", action="store_true", help="keep the work directory")
+    bar = p.add_mutually_exclusive_group()
+    bar.add_argument("--progress", action="store_true", default=None, help="show a progress bar")
+    bar.add_argument("--no-progress", dest="progress", action="store_false")
+    p.set_defaults(handler=_main)
+
+
+def _main(args: argparse.Namespace) -> int:
+    try:
+        scene = load_scene(args.scene)
+        start = _parse_precision(args.precision)
+    except SceneError as exc:
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
+    show = sys.stderr.isatty() if args.progress is None else args.progress
+    bar = _Bars(scene) if show else None
+    try:
+        outcome = generate_reference(
+            scene,
+            args.digits,
+            args.out,
+            precision=start,
+            tolerance=args.tolerance,
+            max_bits=args.max_bits,
+            stretches=args.checkpoints,
+            keep_work=args.keep_work,
+            method=args.certificate,
+            progress=bar.update if bar else None,
+            report=print,
+            command=["cayley-heyoka", *sys.argv[1:]],
+        )
+    except KeyboardInterrupt:
+        print(
+            f"\ninterrupted: what was checkpointed is in {args.out}.work; "
+            "run the same command to continue",
+            file=sys.stderr,
+        )
+        return 130
+    except (ValueError, RuntimeError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2 if isinstance(exc, ValueError) else 1
+    finally:
+        if bar:
+            bar.close()
+    cert = outcome.certificate
+    verdict = "certified" if outcome.certified else "NOT CERTIFIED"
+    print(
+        f"{verdict}: {cert.digits():.1f} digits of {args.digits} requested "
+        f"({outcome.precision.name}, {cert.method}: {cert.compared_with})"
+    )
+    print(f"reference written to {outcome.path}")
+    return 0 if outcome.certified else 1
+
+
+def _parse_precision(text: str | None) -> Precision | None:
+    if text is None:
+        return None
+    if text in ("double", "quad"):
+        return Precision(text)
+    if text.isdigit():
+        return Precision("real", int(text))
+    raise SceneError("--precision", f"must be double, quad or a number of bits, got {text!r}")
+
+
+class _Bars:
+    """One progress bar per run."""
+
+    def __init__(self, scene: Scene) -> None:
+        grid = scene.output.time_grid(Precision())
+        self.t0, self.t1 = float(grid[0]), float(grid[-1])
+        self.bar = None
+        self.label = None
+
+    def update(self, label: str, t: float) -> None:
+        from tqdm import tqdm
+
+        if label != self.label:
+            self.close()
+            self.label = label
+            self.bar = tqdm(
+                total=self.t1 - self.t0, unit="t", desc=label, file=sys.stderr, mininterval=0.2
+            )
+        self.bar.n = round(float(t) - self.t0, 6)
+        self.bar.update(0)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
