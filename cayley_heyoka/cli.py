@@ -17,6 +17,10 @@ from .scene import load_scene
 
 #: Modules that each add one subcommand through ``add_command(subparsers)``.
 WORKFLOW_COMMANDS: tuple[str, ...] = ("reference_run",)
+    "reference_run",
+    "plots",
+    "sweep",
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -125,6 +129,14 @@ def summary(result: Result) -> str:
     lines.append(f"  outputs       {len(result.t)} times, last t = {t_last}")
     for name, value in counters.items():
         lines.append(f"  {name:<13} {value}")
+    ref = meta.get("reference")
+    if ref and ref.get("attempts"):
+        last = ref["attempts"][-1]
+        verdict = "certified" if ref["certified"] else "NOT certified"
+        lines.append(
+            f"  reference     {verdict} to {ref['digits']} digits: largest scaled error "
+            f"{last['scaled_error']:.2e} against {last['compared_with']}"
+        )
     wall = meta.get("wall_seconds", float("nan"))
     compile_s = meta.get("compile_seconds", 0.0)
     cached = " (compiled code from cache)" if meta.get("compiled_from_cache") else ""

@@ -67,6 +67,12 @@ def precision_for(digits: float) -> Precision:
     return Precision("real", 32 * math.ceil(bits / 32))
 
 
+def label(prec: Precision) -> str:
+    """How a precision is named to people: heyoka's ``real128`` is IEEE quad, not MPFR."""
+    names = {"double": "double", "quad": "quad (IEEE binary128)"}
+    return names.get(prec.kind, f"MPFR {prec.bits} bits")
+
+
 def next_precision(prec: Precision) -> Precision:
     """The next rung of the ladder: at least 32 more bits, or a quarter more."""
     if prec.kind == "double":
@@ -191,9 +197,9 @@ def generate_reference(
         )
     first = precision or precision_for(digits + GUARD_DIGITS)
     if first.bits > max_bits:
-        raise ValueError(f"max_bits ({max_bits}) is below the precision needed ({first.name})")
+        raise ValueError(f"max_bits ({max_bits}) is below the precision needed ({label(first)})")
     say(
-        f"plan: {digits} digits; {first.name} first; certificate "
+        f"plan: {digits} digits; {label(first)} first; certificate "
         + (f"from the closed form ({closed.name})" if closed else "from a second precision")
     )
     started = time.perf_counter()
@@ -213,11 +219,11 @@ def generate_reference(
             result = job.run()
             note = f" (resumed after {resumed} of {stretches} stretches)" if resumed else ""
             say(
-                f"run {prec.name}: {result.counters.get('steps', 0)} steps, "
+                f"run {label(prec)}: {result.counters.get('steps', 0)} steps, "
                 f"{time.perf_counter() - t0:.2f} s{note}"
             )
             if not result.success:
-                raise RuntimeError(f"the {prec.name} run stopped: {result.message}")
+                raise RuntimeError(f"the {label(prec)} run stopped: {result.message}")
             runs[key] = (result, where)
         return runs[key][0]
 
@@ -253,7 +259,7 @@ def generate_reference(
         prec, tol = (next_precision(prec) if closed else written.precision), None
         if (next_precision(prec) if closed is None else prec).bits > max_bits:
             break
-        say(f"not enough: raising the precision to {prec.name}")
+        say(f"not enough: raising the precision to {label(prec)}")
     if not attempts:
         raise ValueError(f"max_bits ({max_bits}) leaves no higher precision to compare with")
     certified = attempts[-1]["scaled_error"] <= 10.0**-digits
@@ -603,7 +609,7 @@ def _main(args: argparse.Namespace) -> int:
     verdict = "certified" if outcome.certified else "NOT CERTIFIED"
     print(
         f"{verdict}: {cert.digits():.1f} digits of {args.digits} requested "
-        f"({outcome.precision.name}, {cert.method}: {cert.compared_with})"
+        f"({label(outcome.precision)}, {cert.method}: {cert.compared_with})"
     )
     print(f"reference written to {outcome.path}")
     return 0 if outcome.certified else 1
