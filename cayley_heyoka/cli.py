@@ -16,7 +16,7 @@ from .result import Result
 from .scene import load_scene
 
 #: Modules that each add one subcommand through ``add_command(subparsers)``.
-WORKFLOW_COMMANDS: tuple[str, ...] = ("reference_run",)
+WORKFLOW_COMMANDS: tuple[str, ...] = (
     "reference_run",
     "plots",
     "sweep",

@@ -73,7 +73,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
 
     Returns the compiled object and whether it came from the cache.
     """
-    key = _cache_key(model, options)
+    key = cache_key(model, options)
     hit = _CACHE.get(key)
     if hit is not None:
         return hit, True
@@ -338,7 +338,7 @@ class Propagation:
             variables={k: values[k] for k in model.outputs},
             monitors={k: values[k] for k in model.monitors},
             conserved=model.conserved,
-            events=_event_logs(model, self._ta, prec, self._stopped_at),
+            events=event_logs(model, self._ta, prec, self._stopped_at),
             precision=prec,
             status=self.status,
             message=self.message,
@@ -404,7 +404,8 @@ def _direction(d: int) -> Any:
     }[d]
 
 
-def _cache_key(model: Model, options: IntegratorOptions) -> str:
+def cache_key(model: Model, options: IntegratorOptions) -> str:
+    """The key of ``model``'s compiled code: equal keys share one compiled integrator."""
     text = "\n".join(
         [
             model.structure_key(),
@@ -475,9 +476,10 @@ def evaluate_outputs(
     return out
 
 
-def _event_logs(
+def event_logs(
     model: Model, ta: Any, prec: Precision, stopped_at: tuple | None
 ) -> dict[str, EventLog]:
+    """The occurrences recorded by ``ta``'s event callbacks (and a terminal stop), by name."""
     gathered: dict[str, list[tuple[Any, int, str]]] = {}
     recorded = ta.nt_events if model.events else []
     for spec, ev in zip(model.events, recorded, strict=True):

@@ -152,20 +152,20 @@ class Result:
             f.attrs["conserved"] = json.dumps(list(self.conserved))
             f.attrs["scene"] = json.dumps(self.scene)
             f.attrs["metadata"] = json.dumps(self.metadata)
-            _write_array(f, "t", self.t, prec)
+            write_array(f, "t", self.t, prec)
             for group, arrays in (("variables", self.variables), ("monitors", self.monitors)):
                 g = f.create_group(group)
                 g.attrs["order"] = json.dumps(list(arrays))
                 for name, arr in arrays.items():
-                    _write_array(g, name, arr, prec)
+                    write_array(g, name, arr, prec)
             ge = f.create_group("events")
             ge.attrs["order"] = json.dumps(list(self.events))
             for name, log in self.events.items():
                 g = ge.create_group(name)
-                _write_array(g, "time", log.time, prec)
+                write_array(g, "time", log.time, prec)
                 g.create_dataset("direction", data=np.asarray(log.direction, dtype=np.int8))
                 g.create_dataset(
-                    "label", data=np.asarray(log.label, dtype=object), dtype=_str_dtype()
+                    "label", data=np.asarray(log.label, dtype=object), dtype=string_dtype()
                 )
 
     @classmethod
@@ -178,23 +178,23 @@ class Result:
                 raise ValueError(f"{path}: not a cayley_heyoka result file")
             prec = Precision.from_spec(json.loads(f.attrs["precision"]))
             variables = {
-                k: _read_array(f["variables"][k], prec)
+                k: read_array(f["variables"][k], prec)
                 for k in json.loads(f["variables"].attrs["order"])
             }
             monitors = {
-                k: _read_array(f["monitors"][k], prec)
+                k: read_array(f["monitors"][k], prec)
                 for k in json.loads(f["monitors"].attrs["order"])
             }
             events = {}
             for name in json.loads(f["events"].attrs["order"]):
                 g = f["events"][name]
                 events[name] = EventLog(
-                    time=_read_array(g["time"], prec),
+                    time=read_array(g["time"], prec),
                     direction=g["direction"][()].astype(int),
                     label=np.array([_text(s) for s in g["label"][()]], dtype=str),
                 )
             return cls(
-                t=_read_array(f["t"], prec),
+                t=read_array(f["t"], prec),
                 variables=variables,
                 monitors=monitors,
                 conserved=tuple(json.loads(f.attrs["conserved"])),
@@ -228,21 +228,24 @@ def versions() -> dict[str, str]:
     return dict(_versions())
 
 
-def _str_dtype():
+def string_dtype():
+    """h5py's UTF-8 string type (labels, messages, decimal text)."""
     import h5py
 
     return h5py.string_dtype(encoding="utf-8")
 
 
-def _write_array(group, name: str, arr: np.ndarray, prec: Precision) -> None:
+def write_array(group, name: str, arr: np.ndarray, prec: Precision) -> None:
+    """Write ``arr`` into an HDF5 group: float64 in double, else exact decimal text."""
     if prec.kind == "double":
         group.create_dataset(name, data=np.asarray(arr, dtype=np.float64))
     else:
-        ds = group.create_dataset(name, data=prec.to_text(arr), dtype=_str_dtype())
+        ds = group.create_dataset(name, data=prec.to_text(arr), dtype=string_dtype())
         ds.attrs["encoding"] = "decimal"
 
 
-def _read_array(ds, prec: Precision) -> np.ndarray:
+def read_array(ds, prec: Precision) -> np.ndarray:
+    """Inverse of :func:`write_array`: the values in ``prec``, bit for bit."""
     if ds.attrs.get("encoding") == "decimal":
         return prec.from_text(ds[()])
     return np.asarray(ds[()], dtype=np.float64)

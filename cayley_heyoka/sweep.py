@@ -1,0 +1,476 @@
+"""Conservation studies: one scene swept over a grid or a random ensemble of its numbers.
+
+A *study file* (:mod:`.study`) names a scene and the numbers to vary::
+
+    title = "Energy drift toward the separatrix"
+    scene = "../free_body.toml"            # relative to this file; or an inline [scene] table
+
+    [sweep]
+    kind = "grid"                          # the Cartesian product of the parameters' values
+    [sweep.parameters]
+    "initial.rates[0]" = { start = 0.25, stop = 2.0, count = 8 }
+    "body.inertia[1]" = [1.5, 1.75]
+
+    [run]
+    backend = "local"                      # or "dask"
+    workers = 2
+
+Every *member* is the scene with its numbers substituted exactly (a grid's values as decimal
+text, so a quad study keeps exact inputs; a random draw as the double drawn), validated like
+any scene, and integrated over the scene's own output times. The file written by
+:func:`run_sweep` holds, for each member, the relative drift of each conserved monitor at every
+output time, the final values of the result variables, the Taylor steps, the count of each
+recorded event and whether it completed (layout: :class:`SweepResult` and
+docs/tutorials/sweeps.md).
+
+How members are integrated, on one machine (:func:`propagate_members`):
+
+* members are grouped by compiled structure (scenes differing only in numbers share code);
+* a group without terminal events goes through heyoka's ensemble propagation
+  (``heyoka.ensemble_propagate_grid``, threads), each member's state, parameters and start time
+  set on a copy of the compiled integrator;
+* a group with terminal events (the Rodrigues chart's re-basing, the orbit's revolution count
+  and equatorial stop, Encke's rectification) goes through :func:`cayley_heyoka.run`, since
+  their handlers cannot run inside heyoka's ensemble;
+* monitors are evaluated from the recorded states by :func:`.engine.evaluate_outputs`.
+
+The Dask backend (:mod:`.sweep_dask`) runs the same function on chunks of members in worker
+processes and gathers the chunks into the one file.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import IntegrationError, SceneError
+from .precision import Precision
+from .scene import Scene
+from .study import (
+    BACKENDS,
+    DEFAULT_CHUNK,
+    Member,
+    Parameter,
+    RunOptions,
+    Study,
+    load_study,
+    override_run,
+)
+from .sweep_result import (
+    FAILED,
+    NOT_RUN,
+    OK,
+    Chunk,
+    Layout,
+    SweepResult,
+    Writer,
+    empty_result,
+    fill_chunk,
+    load_sweep,
+    nan_final,
+)
+
+#: How a member was integrated (the counts by path are in the file's metadata).
+PATH_ENSEMBLE = "heyoka.ensemble_propagate_grid"
+PATH_RUN = "cayley_heyoka.run"
+
+Progress = Callable[[int, int], None]
+
+
+# ---------------------------------------------------------------------- running
+def layout_of(study: Study) -> Layout:
+    """The file's columns, from the first member's model."""
+    from .families import FAMILIES
+
+    scene = study.member_scene(0, study.members()[0])
+    model = FAMILIES[scene.family].build(scene)
+    events = tuple(dict.fromkeys(e.name for e in model.events))
+    grid = scene.output.time_grid(scene.integrator.precision)
+    return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
+
+
+def run_sweep(
+    study: Study,
+    *,
+    out: str | Path | None = None,
+    backend: str | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    chunk: int | None = None,
+    progress: Progress | None = None,
+) -> SweepResult:
+    """Integrate every member of a study and gather the results (into one file).
+
+    Parameters
+    ----------
+    study
+        A validated study (:func:`load_study`).
+    out
+        The HDF5 sweep file, written chunk by chunk as members complete: a sweep stopped
+        midway (an interruption, a lost cluster) leaves a readable file with what it computed,
+        its other members marked ``NOT_RUN`` and ``metadata["complete"]`` false.
+    backend, scheduler, workers, chunk
+        Override the study's ``[run]`` table (see :class:`RunOptions`). ``chunk`` defaults to
+        256 members locally and, on Dask, to a quarter of an even share per worker (at most
+        256), so that every worker gets several tasks.
+    progress
+        Called with (members done, members) after each chunk.
+
+    Returns
+    -------
+    SweepResult
+        Every member's drifts, final state, steps, status.
+
+    Raises
+    ------
+    SceneError
+        A member whose scene is invalid (naming the member, its values and the field), or bad
+        run options; raised before anything is integrated.
+    """
+    run = override_run(study.run, backend, scheduler, workers, chunk)
+    members = study.members()
+    for i, values in enumerate(members):
+        study.member_scene(i, values)
+    layout = layout_of(study)
+    prec = study.precision
+    result = empty_result(study, members, layout, prec)
+    writer = Writer(out, result) if out is not None else None
+    paths: Counter = Counter()
+    why: dict[str, str] = {}
+    compile_seconds = 0.0
+    done = 0
+    wall0 = time.perf_counter()
+    info: dict[str, Any] = {"backend": run.backend}
+
+    def take(part: Chunk) -> None:
+        nonlocal compile_seconds, done
+        fill_chunk(result, part, prec)
+        if writer is not None:
+            writer.write(part, prec)
+        paths.update(part.paths)
+        why.update(part.why)
+        compile_seconds += part.compile_seconds
+        done += len(part.index)
+        if progress is not None:
+            progress(done, len(members))
+
+    indexed = list(enumerate(members))
+    stopped = None
+    try:
+        if run.backend == "local":
+            threads = run.workers or os.cpu_count() or 1
+            info["workers"] = threads
+            size = run.chunk or DEFAULT_CHUNK
+            info["chunk"] = size
+            for part in _split(indexed, size):
+                take(propagate_members(study, part, layout, threads))
+        else:
+            from . import sweep_dask
+
+            info.update(sweep_dask.propagate(study, indexed, layout, run, take))
+    except BaseException as exc:
+        stopped = f"{type(exc).__name__}: {exc}"
+        raise
+    finally:
+        from .result import versions
+
+        result.metadata = {
+            **versions(),
+            **info,
+            "wall_seconds": time.perf_counter() - wall0,
+            "compile_seconds": compile_seconds,
+            "paths": dict(paths),
+            "why": why,
+            "complete": stopped is None,
+            "stopped": stopped,
+        }
+        if writer is not None:
+            writer.close(result.metadata)
+    return result
+
+
+def propagate_members(
+    study: Study, members: Sequence[Member], layout: Layout, threads: int = 1
+) -> Chunk:
+    """Integrate some members of a study on this machine (the local path, run by each Dask
+    task too).
+
+    Parameters
+    ----------
+    study
+        The study.
+    members
+        ``(index, values)`` pairs: the member's index in the study and its parameter values.
+    layout
+        The columns to fill (:func:`layout_of`).
+    threads
+        Threads for heyoka's ensemble propagation and for the members run one by one.
+
+    Returns
+    -------
+    Chunk
+        The members' rows. A member that fails (a non-finite state, a stop before the last
+        output time, a model that cannot be built) is marked ``FAILED`` with the reason; the
+        others are unaffected.
+    """
+    from .families import FAMILIES
+
+    prec = study.precision
+    n = len(members)
+    part = Chunk(
+        index=np.array([i for i, _ in members], dtype=np.int64),
+        status=np.full(n, FAILED),
+        message=[""] * n,
+        steps=np.zeros(n, dtype=np.int64),
+        drift={k: np.full((n, layout.n_times), np.nan) for k in layout.drift},
+        final=nan_final(n, len(layout.final), prec),
+        events={k: np.zeros(n, dtype=np.int64) for k in layout.events},
+    )
+    groups: dict[str, list[tuple[int, Scene, Any]]] = {}
+    for row, (index, values) in enumerate(members):
+        try:
+            scene = study.member_scene(index, values)
+            model = FAMILIES[scene.family].build(scene)
+        except Exception as exc:  # one member's bad numbers must not end the sweep
+            part.message[row] = _reason(exc)
+            continue
+        groups.setdefault(_group_key(model, scene), []).append((row, scene, model))
+    for group in groups.values():
+        terminal = group[0][2].terminal
+        if terminal:
+            counters = ", ".join(t.counter for t in terminal)
+            part.why[PATH_RUN] = f"terminal events: {counters}"
+            _run_group(group, part, layout, prec, threads)
+            part.paths[PATH_RUN] = part.paths.get(PATH_RUN, 0) + len(group)
+        else:
+            _ensemble_group(group, part, layout, prec, threads)
+            part.paths[PATH_ENSEMBLE] = part.paths.get(PATH_ENSEMBLE, 0) + len(group)
+    return part
+
+
+# ---------------------------------------------------------------------- command line
+def add_command(subparsers: Any) -> None:
+    """Add ``cayley-heyoka sweep STUDY.toml --out SWEEP.h5``."""
+    p = subparsers.add_parser(
+        "sweep",
+        help="integrate a scene over a grid or random ensemble of its numbers (conservation study)",
+    )
+    p.add_argument("study", type=Path, help="study TOML file")
+    p.add_argument("--out", type=Path, help="write the sweep to this HDF5 file")
+    p.add_argument("--backend", choices=BACKENDS, help="override [run] backend")
+    p.add_argument("--scheduler", help="a Dask scheduler's address (implies --backend dask)")
+    p.add_argument("--workers", type=int, help="threads (local) or LocalCluster processes")
+    p.add_argument("--chunk", type=int, help="members per task (Dask) or per write (local)")
+    bar = p.add_mutually_exclusive_group()
+    bar.add_argument("--progress", action="store_true", default=None, help="show a progress bar")
+    bar.add_argument("--no-progress", dest="progress", action="store_false")
+    p.set_defaults(handler=_command)
+
+
+def _command(args: Any) -> int:
+    try:
+        study = load_study(args.study)
+    except (SceneError, OSError) as exc:
+        print(f"error: {args.study}: {exc}", file=sys.stderr)
+        return 2
+    show = sys.stderr.isatty() if args.progress is None else args.progress
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=study.size, unit="member", file=sys.stderr, dynamic_ncols=True)
+    try:
+        result = run_sweep(
+            study,
+            out=args.out,
+            backend=args.backend,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            chunk=args.chunk,
+            progress=(lambda done, total: bar.update(done - bar.n)) if bar else None,
+        )
+    except SceneError as exc:
+        print(f"error: {args.study}: {exc}", file=sys.stderr)
+        return 2
+    except (RuntimeError, OSError) as exc:  # a backend that failed midway: the file is kept
+        print(f"error: {exc}", file=sys.stderr)
+        if args.out and args.out.exists():
+            print(f"what was computed is in {args.out}", file=sys.stderr)
+        return 1
+    finally:
+        if bar:
+            bar.close()
+    print(result.summary())
+    if args.out:
+        print(f"sweep written to {args.out}")
+    return 0 if result.completed.all() else 1
+
+
+# ---------------------------------------------------------------------- internals: running
+def _split(items: list, size: int) -> Iterator[list]:
+    for lo in range(0, len(items), size):
+        yield items[lo : lo + size]
+
+
+def _group_key(model: Any, scene: Scene) -> str:
+    from .engine import cache_key
+
+    # A step cap is a runtime argument shared by one ensemble call.
+    return f"{cache_key(model, scene.integrator)}/{scene.integrator.max_step}"
+
+
+def _reason(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _record(
+    part: Chunk,
+    row: int,
+    layout: Layout,
+    prec: Precision,
+    values: Mapping[str, np.ndarray],
+    conserved: Sequence[str],
+    complete: bool,
+) -> None:
+    """Fill one member's drifts and final values from its outputs and monitors."""
+    from .result import Result
+
+    reached = len(next(iter(values.values()))) if values else 0
+    monitors = {k: values[k] for k in layout.drift if k in values}
+    probe = Result(t=np.empty(0), variables={}, monitors=monitors, precision=prec)
+    for name in layout.drift:
+        if name not in conserved or name not in values or reached == 0:
+            continue
+        d = np.abs(probe.drift(name))
+        if d.ndim > 1:
+            d = d.max(axis=1)
+        part.drift[name][row, :reached] = d.astype(np.float64)
+    missing = [k for k in layout.drift if k not in conserved]
+    if missing:
+        note = f"; not conserved by this member's flow (drift NaN): {', '.join(missing)}"
+        part.message[row] += note
+    if complete:
+        last = [values[k][-1] if k in values else prec.number("nan") for k in layout.final]
+        if prec.kind == "double":
+            part.final[row] = np.array(last, dtype=np.float64)
+        else:
+            part.final[row] = prec.to_text(prec.array(last))
+
+
+def _run_group(
+    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
+) -> None:
+    """Members whose scenes have terminal events: one ``engine.run`` each."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from . import engine
+
+    _, scene0, model0 = group[0]
+    compiled, cached = engine.compile_model(model0, scene0.integrator)  # once, before threads
+    if not cached:
+        part.compile_seconds += compiled.compile_seconds
+
+    def one(item: tuple[int, Scene, Any]) -> None:
+        row, scene, model = item
+        try:
+            result = engine.run(scene)
+        except IntegrationError as exc:
+            result = exc.result
+        except Exception as exc:  # one member's failure must not end the sweep
+            part.message[row] = _reason(exc)
+            return
+        part.status[row] = OK if result.success else FAILED
+        part.message[row] = result.message
+        part.steps[row] = result.counters.get("steps", 0)
+        for name in layout.events:
+            log = result.events.get(name)
+            part.events[name][row] = len(log) if log is not None else 0
+        values = {**result.variables, **result.monitors}
+        _record(part, row, layout, prec, values, model.conserved, result.success)
+
+    with ThreadPoolExecutor(max_workers=max(1, min(threads, len(group)))) as pool:
+        list(pool.map(one, group))
+
+
+def _ensemble_group(
+    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
+) -> None:
+    """Members sharing compiled code and without terminal events: heyoka's ensemble."""
+    import heyoka as hy
+
+    from . import engine
+
+    _, scene0, model0 = group[0]
+    compiled, cached = engine.compile_model(model0, scene0.integrator)
+    if not cached:
+        part.compile_seconds += compiled.compile_seconds
+    grid = scene0.output.time_grid(prec)
+    held = len(compiled.integrator.pars)
+    starts = [prec.array(model.initial_state) for _, _, model in group]
+    pars = [prec.array(model.pars.values) for _, _, model in group]
+    limit = {}
+    if scene0.integrator.max_step is not None:
+        limit["max_delta_t"] = prec.number(scene0.integrator.max_step)
+
+    def gen(ta: Any, i: int) -> Any:
+        ta.time = grid[0]
+        ta.state[:] = starts[i]
+        ta.pars[:] = pars[i][:held]
+        return ta
+
+    try:
+        runs = hy.ensemble_propagate_grid(
+            compiled.integrator,
+            grid,
+            len(group),
+            gen,
+            algorithm="thread",
+            max_workers=threads,
+            **limit,
+        )
+    except Exception as exc:  # the whole call failed: every member of the group is marked
+        for row, _, _ in group:
+            part.message[row] = _reason(exc)
+        return
+    for i, ((row, _, model), run) in enumerate(zip(group, runs, strict=True)):
+        ta, outcome, nsteps, states = run[0], run[1], run[4], run[-1]
+        reached = len(states)
+        complete = outcome == hy.taylor_outcome.time_limit and reached == len(grid)
+        if complete:
+            part.status[row], part.message[row] = OK, "every output time was reached"
+        elif outcome == hy.taylor_outcome.err_nf_state:
+            part.message[row] = f"the state became non-finite after t = {ta.time}"
+        else:
+            part.message[row] = f"stopped at t = {ta.time} with outcome {outcome}"
+        part.steps[row] = nsteps
+        logs = engine.event_logs(model, ta, prec, None)
+        for name in layout.events:
+            part.events[name][row] = len(logs[name]) if name in logs else 0
+        # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
+        rows = np.array([pars[i].copy() for _ in range(reached)]).reshape(reached, len(pars[i]))
+        values = engine.evaluate_outputs(compiled, model, states, rows, grid[:reached], prec)
+        _record(part, row, layout, prec, values, model.conserved, complete)
+
+
+# The public names of a sweep, from the modules that hold them.
+__all__ = [
+    "FAILED",
+    "NOT_RUN",
+    "OK",
+    "Layout",
+    "Parameter",
+    "RunOptions",
+    "Study",
+    "SweepResult",
+    "load_study",
+    "load_sweep",
+    "propagate_members",
+    "run_sweep",
+]

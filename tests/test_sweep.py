@@ -1,0 +1,376 @@
+"""Conservation sweeps: study files, members equal to run(), the file, failures, Dask = local."""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+import cayley_heyoka as ch
+from cayley_heyoka.cli import main
+from cayley_heyoka.sweep import (
+    FAILED,
+    NOT_RUN,
+    OK,
+    PATH_ENSEMBLE,
+    PATH_RUN,
+    Study,
+    SweepResult,
+    load_study,
+    run_sweep,
+)
+
+STUDIES = Path(__file__).resolve().parent.parent / "examples" / "studies"
+
+# A quaternion body (no terminal events: heyoka's ensemble) recording its invariable-plane
+# crossings, so that event counts are checked too.
+BODY = {
+    "body": {"inertia": ["1", "1.5", "2.5"]},
+    "initial": {"rates": ["0.3", "1", "0.5"], "quaternion": ["1", "0", "0", "0"]},
+    "attitude": {"formulation": "quaternion"},
+    "output": {
+        "times": {"start": "0", "stop": "20", "count": "21"},
+        "events": ["invariable_plane"],
+    },
+}
+# The same body in Cayley's Rodrigues parameters: a terminal event (the chart's re-basing).
+RODRIGUES = {
+    **BODY,
+    "initial": {"rates": ["0.3", "1", "0.5"], "rodrigues": ["0.1", "0.2", "-0.3"]},
+    "attitude": {"formulation": "rodrigues"},
+}
+
+
+def study(scene=BODY, parameters=None, **sweep) -> Study:
+    sweep = {"kind": "grid", **sweep}
+    sweep["parameters"] = parameters or {
+        "initial.rates[0]": {"start": "0.1", "stop": "0.4", "count": 3},
+        "body.inertia[1]": ["1.5", "2"],
+    }
+    return Study.from_dict({"scene": scene, "sweep": sweep})
+
+
+def drift_row(result: ch.Result, name: str) -> np.ndarray:
+    d = np.abs(result.drift(name))
+    return (d.max(axis=1) if d.ndim > 1 else d).astype(np.float64)
+
+
+# ---------------------------------------------------------------------- members
+def test_grid_is_the_product_in_exact_decimal_text():
+    s = study(
+        parameters={
+            "initial.rates[0]": {"start": "0.1", "stop": "0.2", "count": 3},
+            "body.inertia[1]": ["1.5", 2],
+            "integrator.tolerance": {
+                "start": "1e-12",
+                "stop": "1e-8",
+                "count": 3,
+                "spacing": "log",
+            },
+        }
+    )
+    members = s.members()
+    assert s.size == len(members) == 18
+    assert {m[0] for m in members} == {"0.1", "0.15", "0.2"}  # not 0.15000000000000002
+    assert members[0][:2] == ("0.1", "1.5") and members[1][:2] == ("0.1", "1.5")
+    assert members[-1][:2] == ("0.2", 2)
+    tolerances = sorted({m[2] for m in members}, key=lambda v: Fraction(v))
+    assert tolerances[0] == "1e-12" and tolerances[-1] == "1e-8"
+    assert abs(Fraction(tolerances[1]) / Fraction("1e-10") - 1) < Fraction(1, 10**25)
+    scene = s.member_scene(17, members[17])
+    assert scene.source["initial"]["rates"] == ["0.2", "1", "0.5"]
+    assert scene.source["body"]["inertia"] == ["1", 2, "2.5"]
+    assert BODY["initial"]["rates"][0] == "0.3"  # the base scene is not changed
+
+
+def test_random_members_are_reproducible_and_follow_their_distributions():
+    params = {
+        "initial.rates[0]": {"uniform": ["0.2", "0.4"]},
+        "initial.rates[1]": {"normal": ["1", "0.01"]},
+    }
+    a = study(parameters=params, kind="random", count=500, seed=7).members()
+    b = study(parameters=params, kind="random", count=500, seed=7).members()
+    c = study(parameters=params, kind="random", count=500, seed=8).members()
+    assert a == b and a != c and len(a) == 500
+    p, q = np.array(a).T
+    assert p.min() >= 0.2 and p.max() < 0.4
+    assert abs(q.mean() - 1) < 5 * 0.01 / np.sqrt(500) and 0.008 < q.std() < 0.012
+
+
+@pytest.mark.parametrize(
+    "change, field, says",
+    [
+        (
+            {"sweep": {"kind": "grid", "paramters": {}}},
+            "sweep.paramters",
+            "did you mean 'parameters'",
+        ),
+        ({"sweep": {"kind": "mesh"}}, "sweep.kind", "must be one of"),
+        ({"params": {"output.times": [1, 2]}}, '"output.times"', "shared grid"),
+        ({"params": {"initial.rates[3]": [1, 2]}}, '"initial.rates[3]"', "out of range"),
+        ({"params": {"initial.rates": [1, 2]}}, '"initial.rates"', 'like "initial.rates[0]"'),
+        ({"params": {"body.inertia[0].x": [1]}}, '"body.inertia[0].x"', "a number, not a table"),
+        ({"params": {"initial rates": [1]}}, '"initial rates"', "dotted scene path"),
+        ({"params": {"initial.rates[0]": []}}, '"initial.rates[0]"', "must not be empty"),
+        ({"params": {"initial.rates[0]": ["x"]}}, '"initial.rates[0]"[0]', "finite number"),
+        ({"params": {"initial.rates[0]": {"uniform": [0, 1]}}}, '"initial.rates[0]"', "random"),
+        (
+            {"params": {"initial.rates[0]": {"start": 0, "stop": 1}}},
+            '"initial.rates[0]"',
+            "missing ['count']",
+        ),
+        (
+            {"params": {"initial.rates[0]": {"start": 0, "stop": 1, "count": 2, "spacing": "log"}}},
+            '"initial.rates[0]"',
+            "needs start and stop > 0",
+        ),
+        ({"kind": "random", "count": 5}, "sweep.seed", "is required"),
+        ({"kind": "random", "count": 0, "seed": 1}, "sweep.count", "integer >= 1"),
+        (
+            {"kind": "random", "count": 5, "seed": 1, "params": {"initial.rates[0]": [1, 2]}},
+            '"initial.rates[0]"',
+            "needs a distribution",
+        ),
+        (
+            {
+                "kind": "random",
+                "count": 5,
+                "seed": 1,
+                "params": {"initial.rates[0]": {"uniform": [1, 1]}},
+            },
+            '"initial.rates[0]".uniform',
+            "lo < hi",
+        ),
+        (
+            {
+                "kind": "random",
+                "count": 5,
+                "seed": 1,
+                "params": {"initial.rates[0]": {"normal": [1, 0]}},
+            },
+            '"initial.rates[0]".normal',
+            "standard deviation > 0",
+        ),
+        ({"seed": 3}, "sweep.seed", "kind = 'random' only"),
+        ({"run": {"backend": "local", "scheduler": "tcp://h:8786"}}, "run.scheduler", "dask"),
+        ({"run": {"scheduler": "tcp://h:8786", "workers": 2}}, "run.workers", "cluster's own"),
+        ({"run": {"backend": "slurm"}}, "run.backend", "must be one of"),
+        ({"run": {"chunk": 0}}, "run.chunk", "integer >= 1"),
+        ({"scene": {**BODY, "body": {"inertia": [1, 1, 3]}}}, "scene: body.inertia", "triangle"),
+        ({"scene": "missing.toml"}, "scene", "cannot read the scene file"),
+    ],
+)
+def test_bad_study_fields_are_named(tmp_path, change, field, says):
+    data = {
+        "scene": BODY,
+        "sweep": {"kind": change.pop("kind", "grid")},
+        "run": change.pop("run", {}),
+    }
+    for key in ("count", "seed"):
+        if key in change:
+            data["sweep"][key] = change.pop(key)
+    data["sweep"]["parameters"] = change.pop("params", {"initial.rates[0]": [0.1]})
+    data.update(change)
+    with pytest.raises(ch.SceneError) as err:
+        Study.from_dict(data, tmp_path)
+    assert err.value.field.endswith(field) and says in err.value.constraint, str(err.value)
+
+
+def test_an_invalid_member_is_named_with_its_values_before_anything_runs():
+    s = study(parameters={"initial.rates[0]": ["0.1", "0.2"], "body.inertia[1]": ["1.5", "1.25"]})
+    with pytest.raises(ch.SceneError) as err:
+        run_sweep(s)
+    assert (
+        err.value.field == "member 1 (initial.rates[0] = 0.1, body.inertia[1] = 1.25): body.inertia"
+    )
+    assert "violates the triangle inequality A + B >= C" in err.value.constraint
+
+
+def test_bundled_studies_are_valid():
+    files = sorted(STUDIES.glob("*.toml"))
+    assert files
+    for path in files:
+        s = load_study(path)
+        members = s.members()
+        assert len(members) == s.size > 1
+        for i, values in enumerate(members):
+            s.member_scene(i, values)
+
+
+# ---------------------------------------------------------------------- integration
+@pytest.fixture(scope="module")
+def body_sweep(tmp_path_factory):
+    """A grid with one member whose state overflows (q = 1e160): recorded, not fatal."""
+    s = study(
+        parameters={"initial.rates[1]": ["1", "1e160", "0.8"], "body.inertia[1]": ["1.5", "2"]}
+    )
+    out = tmp_path_factory.mktemp("sweep") / "body.h5"
+    return s, run_sweep(s, out=out, workers=2, chunk=4), out
+
+
+def test_ensemble_members_equal_run_bit_for_bit(body_sweep):
+    s, result, _ = body_sweep
+    assert result.metadata["paths"] == {PATH_ENSEMBLE: 6}
+    for i, values in enumerate(s.members()):
+        scene = s.member_scene(i, values)
+        if values[0] == "1e160":
+            assert result.status[i] == FAILED and "non-finite" in result.message[i]
+            assert np.isnan(result.final_state[i]).all()
+            with pytest.raises(ch.IntegrationError):
+                ch.run(scene)
+            continue
+        alone = ch.run(scene)
+        assert result.status[i] == OK and result.steps[i] == alone.counters["steps"]
+        for name in alone.conserved:
+            np.testing.assert_array_equal(result.drift[name][i], drift_row(alone, name))
+        expected = [alone.variables[k][-1] for k in result.final_names]
+        np.testing.assert_array_equal(result.final_state[i], expected)
+        assert result.events["invariable_plane"][i] == len(alone.events["invariable_plane"]) > 0
+
+
+def test_members_with_terminal_events_go_through_run():
+    s = study(scene=RODRIGUES, parameters={"initial.rates[0]": ["0.2", "0.3"]})
+    result = run_sweep(s, workers=2)
+    assert result.metadata["paths"] == {PATH_RUN: 2}
+    assert "rebasings" in result.metadata["why"][PATH_RUN]
+    for i, values in enumerate(s.members()):
+        alone = ch.run(s.member_scene(i, values))
+        for name in alone.conserved:
+            np.testing.assert_array_equal(result.drift[name][i], drift_row(alone, name))
+        assert result.final_names == tuple(alone.variables)
+        np.testing.assert_array_equal(
+            result.final_state[i], [v[-1] for v in alone.variables.values()]
+        )
+
+
+def test_the_file_has_the_documented_layout(body_sweep):
+    s, result, out = body_sweep
+    with h5py.File(out) as f:
+        assert f.attrs["format"] == "cayley_heyoka.sweep"
+        assert json.loads(f.attrs["study"])["sweep"]["parameters"]["initial.rates[1]"][1] == "1e160"
+        meta = json.loads(f.attrs["metadata"])
+        assert meta["backend"] == "local" and meta["complete"] and meta["heyoka"]
+        assert f["t"].shape == (21,) and f["t"].dtype == np.float64
+        assert set(f["parameters"]) == {"initial.rates[1]", "body.inertia[1]"}
+        np.testing.assert_array_equal(f["parameters"]["body.inertia[1]"][()], [1.5, 2] * 3)
+        for name in ("energy", "momentum_squared", "momentum_space"):
+            assert f["drift"][name].shape == (6, 21) and f["drift"][name].dtype == np.float64
+        assert f["final_state"].shape == (6, len(json.loads(f["final_state"].attrs["names"])))
+        np.testing.assert_array_equal(f["status"][()], [OK, OK, FAILED, FAILED, OK, OK])
+        assert f["message"].shape == f["steps"].shape == (6,)
+    loaded = SweepResult.load(out)
+    for name in result.drift:
+        np.testing.assert_array_equal(loaded.drift[name], result.drift[name])
+    np.testing.assert_array_equal(loaded.final_state, result.final_state)
+    assert list(loaded.message) == list(result.message) and loaded.final_names == result.final_names
+
+
+def test_summary_names_the_worst_member(body_sweep):
+    _, result, _ = body_sweep
+    text = result.summary()
+    final = np.where(result.completed, result.drift["energy"][:, -1], np.nan)
+    worst = int(np.nanargmax(final))
+    values = result.values(worst)
+    assert f"{np.nanmax(final):9.2e}" in text and f"{np.nanmedian(final):9.2e}" in text
+    assert f"  {worst} (initial.rates[1] = {values['initial.rates[1]']:.6g}" in text
+    assert (
+        "4 completed, 2 failed, 0 not run" in text and "member 2 (initial.rates[1] = 1e+160" in text
+    )
+
+
+def test_quad_study_keeps_exact_numbers(tmp_path):
+    scene = {**BODY, "integrator": {"precision": "quad"}}
+    scene["output"] = {"times": {"start": "0", "stop": "2", "count": "3"}}
+    s = study(
+        scene=scene, parameters={"initial.rates[0]": {"start": "0.1", "stop": "0.3", "count": 2}}
+    )
+    result = run_sweep(s, out=tmp_path / "quad.h5", workers=1)
+    loaded = SweepResult.load(tmp_path / "quad.h5")
+    prec = ch.Precision("quad")
+    assert loaded.parameters["initial.rates[0]"][0] == prec.number("0.1")  # not double's 0.1
+    for i, values in enumerate(s.members()):
+        alone = ch.run(s.member_scene(i, values))
+        assert alone.t[-1] == loaded.t[-1]
+        expected = [alone.variables[k][-1] for k in result.final_names]
+        assert all(a == b for a, b in zip(loaded.final_state[i], expected, strict=True))
+        np.testing.assert_array_equal(loaded.drift["energy"][i], drift_row(alone, "energy"))
+    assert np.nanmax(loaded.drift["energy"]) < 1e-30
+
+
+def test_an_interrupted_sweep_keeps_what_it_computed(tmp_path):
+    s = study()  # 6 members
+
+    def stop_after_first_chunk(done, total):
+        raise KeyboardInterrupt
+
+    out = tmp_path / "stopped.h5"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(s, out=out, chunk=2, progress=stop_after_first_chunk)
+    kept = SweepResult.load(out)
+    np.testing.assert_array_equal(kept.status, [OK, OK] + [NOT_RUN] * 4)
+    assert np.isfinite(kept.drift["energy"][:2]).all() and np.isnan(kept.drift["energy"][2:]).all()
+    assert kept.metadata["complete"] is False and "KeyboardInterrupt" in kept.metadata["stopped"]
+    assert "2 completed, 0 failed, 4 not run (STOPPED" in kept.summary()
+
+
+# ---------------------------------------------------------------------- command line and Dask
+def test_command_line_exit_codes(tmp_path, capsys):
+    good = STUDIES / "free_body_grid.toml"
+    out = tmp_path / "grid.h5"
+    assert main(["sweep", str(good), "--out", str(out), "--no-progress", "--workers", "2"]) == 0
+    text = capsys.readouterr().out
+    assert "28 completed, 0 failed" in text and f"sweep written to {out}" in text
+    assert SweepResult.load(out).completed.all()
+
+    failing = tmp_path / "failing.toml"
+    failing.write_text(
+        'scene = "' + str(STUDIES.parent / "free_body.toml") + '"\n'
+        '[sweep]\nkind = "grid"\n[sweep.parameters]\n"initial.rates[1]" = [0.25, 1e160]\n'
+    )
+    assert main(["sweep", str(failing), "--no-progress"]) == 1
+    assert "1 completed, 1 failed" in capsys.readouterr().out
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text(failing.read_text().replace("[1]", "[5]"))
+    assert main(["sweep", str(bad), "--no-progress"]) == 2
+    assert (
+        'sweep.parameters."initial.rates[5]": index [5] is out of range' in capsys.readouterr().err
+    )
+
+    assert main(["sweep", str(good), "--backend", "local", "--scheduler", "tcp://x:1"]) == 2
+    assert "needs backend = 'dask'" in capsys.readouterr().err
+
+
+def test_dask_local_cluster_gives_the_local_arrays(body_sweep, tmp_path):
+    pytest.importorskip("distributed")
+    s, local, _ = body_sweep
+    result = run_sweep(s, out=tmp_path / "dask.h5", backend="dask", workers=2, chunk=2)
+    meta = SweepResult.load(tmp_path / "dask.h5").metadata
+    assert meta["backend"] == "dask" and meta["cluster"] == "LocalCluster" and meta["workers"] == 2
+    assert meta["paths"] == {PATH_ENSEMBLE: 6}
+    np.testing.assert_array_equal(result.status, local.status)
+    np.testing.assert_array_equal(result.steps, local.steps)
+    np.testing.assert_array_equal(result.final_state, local.final_state)
+    for name in local.drift:
+        np.testing.assert_array_equal(result.drift[name], local.drift[name])
+    np.testing.assert_array_equal(
+        result.events["invariable_plane"], local.events["invariable_plane"]
+    )
+    assert list(result.message) == list(local.message)
+
+
+def test_an_unreachable_scheduler_is_an_error_and_the_file_says_so(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("distributed")
+    from cayley_heyoka import sweep_dask
+
+    monkeypatch.setattr(sweep_dask, "CONNECT_TIMEOUT", 1)
+    out = tmp_path / "lost.h5"
+    args = ["sweep", str(STUDIES / "free_body_random.toml"), "--out", str(out), "--no-progress"]
+    assert main([*args, "--scheduler", "tcp://127.0.0.1:9"]) == 1
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
+    kept = SweepResult.load(out)
+    assert not kept.metadata["complete"] and (kept.status == NOT_RUN).all()
