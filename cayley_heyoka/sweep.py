@@ -1,20 +1,6 @@
 """Conservation studies: one scene swept over a grid or a random ensemble of its numbers.
 
-A *study file* (:mod:`.study`) names a scene and the numbers to vary::
-
-    title = "Energy drift toward the separatrix"
-    scene = "../free_body.toml"            # relative to this file; or an inline [scene] table
-
-    [sweep]
-    kind = "grid"                          # the Cartesian product of the parameters' values
-    [sweep.parameters]
-    "initial.rates[0]" = { start = 0.25, stop = 2.0, count = 8 }
-    "body.inertia[1]" = [1.5, 1.75]
-
-    [run]
-    backend = "local"                      # or "dask"
-    workers = 2
-
+A *study file* (:mod:`.study`, which shows one) names a scene and the numbers to vary.
 Every *member* is the scene with its numbers substituted exactly (a grid's values as decimal
 text, so a quad study keeps exact inputs; a random draw as the double drawn), validated like
 any scene, and integrated over the scene's own output times. The file written by

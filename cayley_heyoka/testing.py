@@ -33,13 +33,12 @@ from .result import Result
 DRIFT_FORMAT = "cayley_heyoka.drift"
 DRIFT_FORMAT_VERSION = 1
 
-#: Defaults of :func:`assert_drift_within`. Measured on every bundled scene with conserved
-#: quantities, over 24 re-runs each with the initial state moved by 3 to 72 ulps (another
-#: round-off realisation, as another CPU or LLVM version gives): above a floor of 8 ε, the
-#: largest factor any window needed over the unperturbed run was 1.85 (2.9 above 4 ε);
-#: compiled in compact mode or with ``high_accuracy`` (other instruction sequences), 1.2. A
-#: tolerance of 1e-11 instead of the default needs factors of 230 to 1000 in the worst window
-#: (the free body and both tops; the planets' drift does not change with it).
+#: Defaults of :func:`assert_drift_within`, from ``validation/drift_margins.py`` (REPORT.md,
+#: "drift_margins"): over 24 re-runs of every bundled scene with conserved quantities, the
+#: initial state moved by 3 to 72 ε (another round-off realisation, as another CPU or LLVM
+#: version gives), no window needed a factor above 2.35 over the golden run above a floor of
+#: 8 ε; a tolerance of 1e-11 instead of the default needs 229 to 1050 (the free body and the
+#: tops; the planets' drift does not grow with it).
 DRIFT_FACTOR = 4.0
 DRIFT_FLOOR = 8.0
 
