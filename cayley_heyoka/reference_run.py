@@ -223,7 +223,14 @@ def generate_reference(
                 f"{time.perf_counter() - t0:.2f} s{note}"
             )
             if not result.success:
-                raise RuntimeError(f"the {label(prec)} run stopped: {result.message}")
+                # What was computed is kept, as `run --out` keeps it; it certifies nothing.
+                stopped = Certificate("none", "the run stopped", {}, scaled=math.inf)
+                meta = {"command": command or [], "digits": digits, "certified": False}
+                _write(out, result, stopped, digits, False, meta)
+                raise RuntimeError(
+                    f"the {label(prec)} run stopped: {result.message}; what it computed is in "
+                    f"{out} (not certified)"
+                )
             runs[key] = (result, where)
         return runs[key][0]
 

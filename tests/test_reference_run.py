@@ -233,3 +233,43 @@ def test_killed_and_interrupted_command_resumes_to_the_same_file(tmp_path):
     ca, cb = read_certificate(out), read_certificate(whole)
     for name, err in ca["errors"].items():
         assert np.array_equal(err, cb["errors"][name])
+
+
+def test_two_precision_certificate_catches_a_loose_run_and_escalates(tmp_path):
+    """Without a closed form the loose run is caught by the second precision; the more precise
+    run then becomes the one checked, against a third."""
+    out = generate_reference(
+        free_body(), 20, tmp_path / "ref.h5", tolerance="1e-12", method="two-precisions"
+    )
+    first, last = out.attempts[0], out.attempts[-1]
+    assert first["precision"] == "quad" and first["scaled_error"] > 1e-15
+    assert out.certified and len(out.attempts) == 2
+    assert last["precision"] != "quad" and last["scaled_error"] <= 1e-20
+    assert ch.load_result(out.path).precision.bits > int(last["precision"].removeprefix("real"))
+
+
+def test_failed_run_is_reported_not_certified(tmp_path, capsys):
+    scene = tmp_path / "boom.toml"
+    scene.write_text(
+        "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [0.1, 0.2, 1]\n"
+        '[forces.potential]\nV = "exp(100 * (t - 6)) * lambda"\n'
+        "[output]\ntimes = { start = 0, stop = 20, count = 21 }\n"
+    )
+    code = main(
+        [
+            "reference",
+            str(scene),
+            "--digits",
+            "10",
+            "--out",
+            str(tmp_path / "r.h5"),
+            "--no-progress",
+        ]
+    )
+    assert code == 1
+    err = capsys.readouterr().err
+    assert "run stopped" in err and "non-finite" in err and "not certified" in err
+    partial = ch.load_result(tmp_path / "r.h5")
+    assert not partial.success and 6 <= len(partial.t) < 21
+    cert = read_certificate(tmp_path / "r.h5")
+    assert not cert["certified"] and cert["digits_certified"] == -np.inf
