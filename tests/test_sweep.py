@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import socket
+import subprocess
+import sys
 from fractions import Fraction
 from pathlib import Path
 
@@ -374,3 +377,54 @@ def test_an_unreachable_scheduler_is_an_error_and_the_file_says_so(tmp_path, cap
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
     kept = SweepResult.load(out)
     assert not kept.metadata["complete"] and (kept.status == NOT_RUN).all()
+
+
+def test_scheduler_address_reaches_a_cluster_of_separate_processes(body_sweep, tmp_path):
+    """Scaling out: a scheduler and a worker started as their own processes, as on a cluster;
+    the sweep connects by address and gathers the same arrays as the local run."""
+    pytest.importorskip("distributed")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    scheduler = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "distributed.cli.dask_scheduler",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--dashboard-address",
+            ":0",
+        ],
+        **quiet,
+    )
+    worker = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "distributed.cli.dask_worker",
+            address,
+            "--nworkers",
+            "1",
+            "--nthreads",
+            "1",
+            "--no-dashboard",
+        ],
+        **quiet,
+    )
+    try:
+        s, local, _ = body_sweep
+        result = run_sweep(s, out=tmp_path / "remote.h5", backend="dask", scheduler=address)
+    finally:
+        for proc in (worker, scheduler):
+            proc.terminate()
+            proc.wait(timeout=30)
+    meta = SweepResult.load(tmp_path / "remote.h5").metadata
+    assert meta["cluster"] == f"scheduler {address}" and meta["workers"] == 1
+    np.testing.assert_array_equal(result.final_state, local.final_state)
+    for name in local.drift:
+        np.testing.assert_array_equal(result.drift[name], local.drift[name])
