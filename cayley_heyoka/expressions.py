@@ -41,6 +41,15 @@ FUNCTIONS = {
 _KEYWORD_NAMES = {"lambda": "lambda_"}
 _EXACT_INT_LIMIT = 2**53
 
+#: Limits of an expression text (docs/scenes.md, "Limits"), checked on its tokens before
+#: Python's parser runs: a chain of ~3000 operators overflows its recursion during AST
+#: construction (``x**x**...`` exhausts memory), and nothing physical needs that many.
+MAX_EXPRESSION_CHARS = 100_000
+MAX_EXPRESSION_OPERATORS = 2_000
+#: Nesting of parentheses, calls, powers and unary signs (a sum or product of many terms is
+#: one level): deeper trees would exhaust the recursion that builds and compiles them.
+MAX_EXPRESSION_DEPTH = 100
+
 
 def parse_expression(
     text: str, symbols: Mapping[str, hy.expression], pars: ParTable, field: str
@@ -61,10 +70,7 @@ def parse_expression(
     if not isinstance(text, str) or not text.strip():
         raise SceneError(field, f"must be a non-empty expression string, got {text!r}")
     source = _rename_keywords(text, field)
-    try:
-        tree = ast.parse(source.strip(), mode="eval")
-    except SyntaxError as exc:
-        raise SceneError(field, f"not a valid expression ({exc.msg}): {text!r}") from None
+    tree = _parse(source, text, field)
     table = {_KEYWORD_NAMES.get(k, k): v for k, v in symbols.items()}
     table.setdefault("t", hy.time)
     table.setdefault("pi", hy.pi)
@@ -74,17 +80,18 @@ def parse_expression(
         if isinstance(node, ast.Expression):
             return build(node.body)
         if isinstance(node, ast.BinOp):
-            a, b = build(node.left), build(node.right)
-            ops = {
-                ast.Add: lambda: a + b,
-                ast.Sub: lambda: a - b,
-                ast.Mult: lambda: a * b,
-                ast.Div: lambda: a / b,
-                ast.Pow: lambda: a**b,
-            }
-            if type(node.op) not in ops:
-                raise SceneError(field, f"operator {type(node.op).__name__} is not allowed")
-            return ops[type(node.op)]()
+            # A left-leaning chain (a + b - c + ...) is folded in a loop, left to right as
+            # Python would, so that a sum of many terms costs no recursion.
+            chain = []
+            while isinstance(node, ast.BinOp) and type(node.op) in _CHAINED:
+                chain.append(node)
+                node = node.left
+            value = build(node)
+            for link in reversed(chain):
+                value = _apply(link.op, value, build(link.right), field)
+            if not chain:
+                value = _apply(node.op, build(node.left), build(node.right), field)
+            return value
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
             v = build(node.operand)
             return -v if isinstance(node.op, ast.USub) else v
@@ -112,9 +119,9 @@ def parse_expression(
     return build(tree)
 
 
-def names_used(text: str) -> set[str]:
+def names_used(text: str, field: str = "expression") -> set[str]:
     """The names an expression text refers to (``lambda`` reported as ``lambda``)."""
-    tree = ast.parse(_rename_keywords(text, "expression").strip(), mode="eval")
+    tree = _parse(_rename_keywords(text, field), text, field)
     inv = {v: k for k, v in _KEYWORD_NAMES.items()}
     return {inv.get(n.id, n.id) for n in ast.walk(tree) if isinstance(n, ast.Name)}
 
@@ -130,11 +137,64 @@ def uses_time(text: object) -> bool:
         return False
 
 
+_CHAINED = (ast.Add, ast.Sub, ast.Mult, ast.Div)
+_OPERATORS = {
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: lambda a, b: a / b,
+    ast.Pow: lambda a, b: a**b,
+}
+
+
+def _apply(op: ast.operator, a: hy.expression, b: hy.expression, field: str) -> hy.expression:
+    if type(op) not in _OPERATORS:
+        raise SceneError(field, f"operator {type(op).__name__} is not allowed")
+    return _OPERATORS[type(op)](a, b)
+
+
+def _parse(source: str, text: str, field: str) -> ast.Expression:
+    """Python's syntax tree of ``source`` (``text`` renamed), within the limits above."""
+    try:
+        tree = ast.parse(source.strip(), mode="eval")
+    except SyntaxError as exc:
+        raise SceneError(field, f"not a valid expression ({exc.msg}): {_short(text)}") from None
+    depth, stack = 0, [(tree.body, 1)]
+    while stack:
+        node, level = stack.pop()
+        while isinstance(node, ast.BinOp) and isinstance(node.op, _CHAINED):
+            stack.append((node.right, level + 1))
+            node = node.left
+        depth = max(depth, level)
+        if depth > MAX_EXPRESSION_DEPTH:
+            raise SceneError(
+                field,
+                f"nested deeper than {MAX_EXPRESSION_DEPTH} levels (parentheses, calls, powers, "
+                f"signs): {_short(text)}",
+            )
+        stack += [(child, level + 1) for child in ast.iter_child_nodes(node)]
+    return tree
+
+
+def _short(text: str) -> str:
+    return repr(text) if len(text) <= 200 else f"{text[:120]!r}... ({len(text)} characters)"
+
+
 def _rename_keywords(text: str, field: str) -> str:
+    if len(text) > MAX_EXPRESSION_CHARS:
+        raise SceneError(
+            field, f"longer than {MAX_EXPRESSION_CHARS} characters ({len(text)}): {_short(text)}"
+        )
     try:
         tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))
-    except (tokenize.TokenError, IndentationError) as exc:
-        raise SceneError(field, f"not a valid expression ({exc}): {text!r}") from None
+    except (tokenize.TokenError, IndentationError, SyntaxError) as exc:
+        raise SceneError(field, f"not a valid expression ({exc}): {_short(text)}") from None
+    operators = sum(tok.type == tokenize.OP and tok.string not in "()," for tok in tokens)
+    if operators > MAX_EXPRESSION_OPERATORS:
+        raise SceneError(
+            field,
+            f"has {operators} operators, more than {MAX_EXPRESSION_OPERATORS}: {_short(text)}",
+        )
     out = [
         (tok.type, _KEYWORD_NAMES.get(tok.string, tok.string))
         if tok.type == tokenize.NAME
