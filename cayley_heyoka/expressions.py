@@ -82,15 +82,12 @@ def parse_expression(
         if isinstance(node, ast.BinOp):
             # A left-leaning chain (a + b - c + ...) is folded in a loop, left to right as
             # Python would, so that a sum of many terms costs no recursion.
-            chain = []
-            while isinstance(node, ast.BinOp) and type(node.op) in _CHAINED:
-                chain.append(node)
-                node = node.left
-            value = build(node)
+            chain = [node]
+            while isinstance(chain[-1].left, ast.BinOp) and type(chain[-1].op) in _CHAINED:
+                chain.append(chain[-1].left)
+            value = build(chain[-1].left)
             for link in reversed(chain):
                 value = _apply(link.op, value, build(link.right), field)
-            if not chain:
-                value = _apply(node.op, build(node.left), build(node.right), field)
             return value
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
             v = build(node.operand)

@@ -4,8 +4,10 @@ A scene is a nested dictionary (the TOML document). Its model family is recognis
 family's table (``[body]`` for rigid-body rotation); the generic tables are
 
 ``[integrator]``
-    ``precision`` ("double", "quad" or ``{bits = N}``), ``tolerance`` ("auto" or a positive
-    number), ``compact_mode`` ("auto", true, false), ``high_accuracy`` (bool).
+    ``precision`` ("double", "quad" or ``{bits = N}``), ``tolerance`` ("auto" or a number no
+    smaller than the precision's epsilon), ``compact_mode`` ("auto", true, false),
+    ``high_accuracy`` (bool), ``max_step`` ("none" or a positive number), ``max_steps`` (the
+    step budget, :data:`DEFAULT_MAX_STEPS`).
 ``[output]``
     ``times`` (``{start, stop, count}`` or a list of increasing numbers), ``events`` (names of
     events to record), ``monitors`` (names of monitored quantities; default: all available).
@@ -36,6 +38,18 @@ from .errors import SceneError
 from .precision import Number, Precision, exact_fraction
 
 _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
+
+#: The step budget of a run (``integrator.max_steps``): ten times the longest run of our own
+#: validation (10⁸ steps, validation/bench_conservation.py), minutes in double. A run that
+#: spends it stops cleanly with its results; the budget exists so that nothing runs forever.
+DEFAULT_MAX_STEPS = 10**9
+#: Output times at most (10⁷ rows of a 20-number model are 1.6 GB in double); the engine also
+#: bounds the recorded rows' estimated memory (:data:`cayley_heyoka.engine.MAX_RECORD_BYTES`).
+MAX_OUTPUT_TIMES = 10**7
+#: Largest scene file read (a list of 10⁷ output times as text is ~200 MB; nothing else is big).
+MAX_SCENE_BYTES = 256 * 2**20
+#: Deepest nesting of tables and lists (the schema needs 4; tomllib recurses once per level).
+MAX_SCENE_DEPTH = 16
 
 
 # ---------------------------------------------------------------------- helpers for families
@@ -96,17 +110,28 @@ class IntegratorOptions:
     compact_mode: bool | None = None
     high_accuracy: bool = False
     max_step: Number | None = None
+    max_steps: int = DEFAULT_MAX_STEPS
 
     @classmethod
     def parse(cls, table: Mapping[str, Any]) -> IntegratorOptions:
         check_keys(
             table,
-            ["precision", "tolerance", "compact_mode", "high_accuracy", "max_step"],
+            ["precision", "tolerance", "compact_mode", "high_accuracy", "max_step", "max_steps"],
             "integrator",
         )
         precision = Precision.from_spec(table.get("precision", "double"))
         tol = table.get("tolerance", "auto")
         tolerance = None if tol == "auto" else number(tol, "integrator.tolerance", positive=True)
+        # heyoka's order grows like -log(tol): below epsilon it buys no accuracy, only a longer
+        # compilation (1e-310 in double compiled for 14 minutes and 3 GB before it was killed).
+        epsilon = Fraction(2) ** (1 - precision.bits)
+        if tolerance is not None and exact_fraction(tolerance) < epsilon:
+            raise SceneError(
+                "integrator.tolerance",
+                f"must be >= the epsilon of {precision.name}, 2^{1 - precision.bits} = "
+                f"{precision.epsilon:.3g} (a smaller one buys no accuracy), got {tolerance}; "
+                "raise the precision instead",
+            )
         compact = table.get("compact_mode", "auto")
         if compact not in ("auto", True, False):
             raise SceneError(
@@ -117,7 +142,13 @@ class IntegratorOptions:
             raise SceneError("integrator.high_accuracy", f"must be true or false, got {high!r}")
         step = table.get("max_step", "none")
         max_step = None if step == "none" else number(step, "integrator.max_step", positive=True)
-        return cls(precision, tolerance, None if compact == "auto" else compact, high, max_step)
+        budget = table.get("max_steps", DEFAULT_MAX_STEPS)
+        if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+            raise SceneError(
+                "integrator.max_steps", f"must be an integer >= 1 (a step budget), got {budget!r}"
+            )
+        compact_mode = None if compact == "auto" else compact
+        return cls(precision, tolerance, compact_mode, high, max_step, budget)
 
 
 @dataclass(frozen=True)
@@ -151,18 +182,47 @@ class OutputOptions:
             times, grid, tuple(events), None if monitors is None else tuple(monitors), options
         )
 
-    def time_grid(self, precision: Precision) -> np.ndarray:
-        """The output times in the target precision (a grid is built there, not in double)."""
+    @property
+    def count(self) -> int:
+        """The number of output times."""
+        return len(self.times) if self.times is not None else self.grid[2]
+
+    def span(self) -> tuple[Number, Number]:
+        """The first and last output times, as written."""
         if self.times is not None:
-            return precision.array(self.times)
+            return self.times[0], self.times[-1]
         start, stop, count = self.grid
-        a, b = precision.number(start), precision.number(stop)
-        if count == 1:
-            return precision.array([start])
-        n = count - 1
-        return np.array(
-            [a + (b - a) * precision.number(k) / precision.number(n) for k in range(count)]
-        )
+        return start, stop if count > 1 else start
+
+    def time_grid(self, precision: Precision) -> np.ndarray:
+        """The output times in the target precision (a grid is built there, not in double).
+
+        Raises
+        ------
+        SceneError
+            If two times are equal once rounded to ``precision`` (increasing as written is
+            not enough: 0.1 and 0.10000000000000000001 are one double).
+        """
+        if self.times is not None:
+            grid = precision.array(self.times)
+        elif self.grid[2] == 1:
+            grid = precision.array([self.grid[0]])
+        else:
+            start, stop, count = self.grid
+            a, b = precision.number(start), precision.number(stop)
+            n = precision.number(count - 1)
+            grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
+        if len(grid) > 1:
+            same = np.flatnonzero(~(grid[1:] > grid[:-1]))
+            if len(same):
+                i = int(same[0])
+                raise SceneError(
+                    "output.times",
+                    f"must be strictly increasing in {precision.name}: times [{i}] and "
+                    f"[{i + 1}] are both {grid[i]} once rounded; space them further or raise "
+                    "the precision",
+                )
+        return grid
 
 
 def _parse_times(spec: Any) -> tuple[tuple[Number, ...] | None, tuple | None]:
@@ -179,12 +239,19 @@ def _parse_times(spec: Any) -> tuple[tuple[Number, ...] | None, tuple | None]:
             count = int(count)
         if isinstance(count, bool) or not isinstance(count, int) or count < 1:
             raise SceneError(f"{where}.count", f"must be an integer >= 1, got {count!r}")
+        if count > MAX_OUTPUT_TIMES:
+            raise SceneError(
+                f"{where}.count",
+                f"must be at most {MAX_OUTPUT_TIMES:.0e} output times, got {count}",
+            )
         if count > 1 and exact_fraction(stop) <= exact_fraction(start):
             raise SceneError(where, f"stop ({stop}) must be greater than start ({start})")
         return None, (start, stop, count)
     if isinstance(spec, list | tuple):
         if not spec:
             raise SceneError(where, "must not be empty")
+        if len(spec) > MAX_OUTPUT_TIMES:
+            raise SceneError(where, f"must be at most {MAX_OUTPUT_TIMES:.0e} output times")
         values = tuple(number(v, f"{where}[{i}]") for i, v in enumerate(spec))
         fr = [exact_fraction(v) for v in values]
         for i in range(1, len(fr)):
@@ -264,11 +331,7 @@ class Scene:
     @classmethod
     def from_toml(cls, text: str) -> Scene:
         """Parse TOML text (floats kept as their decimal text)."""
-        try:
-            data = tomllib.loads(text, parse_float=str)
-        except tomllib.TOMLDecodeError as exc:
-            raise SceneError("scene", f"not valid TOML: {exc}") from None
-        return cls.from_dict(data)
+        return cls.from_dict(parse_toml(text))
 
     def to_dict(self) -> dict[str, Any]:
         """The plain dictionary this scene was built from."""
@@ -276,8 +339,61 @@ class Scene:
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file."""
-    return Scene.from_toml(Path(path).read_text())
+    """Read and validate a scene file.
+
+    Raises
+    ------
+    SceneError
+        With field ``scene`` if the file cannot be read (missing, a directory, unreadable,
+        larger than :data:`MAX_SCENE_BYTES`, not UTF-8) or is not TOML; else the field at fault.
+    """
+    return Scene.from_dict(read_toml(path))
+
+
+def read_toml(path: str | Path, what: str = "scene") -> dict[str, Any]:
+    """The TOML document of a file, floats kept as their decimal text.
+
+    Every way the file can fail to be a TOML document raises :class:`SceneError` with field
+    ``what``: missing, a directory, unreadable, too large, not UTF-8, not TOML, too deep.
+    """
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise SceneError(what, f"{str(path)!r} is a directory, not a TOML file")
+        size = path.stat().st_size
+        if size > MAX_SCENE_BYTES:
+            raise SceneError(what, f"{str(path)!r} has {size} bytes, more than {MAX_SCENE_BYTES}")
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise SceneError(what, f"no such file: {str(path)!r}") from None
+    except OSError as exc:
+        raise SceneError(what, f"cannot read {str(path)!r}: {exc.strerror}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError(
+            what, f"must be UTF-8 text (TOML); byte {exc.start} is {raw[exc.start]:#04x}"
+        ) from None
+    return parse_toml(text, what)
+
+
+def parse_toml(text: str, what: str = "scene") -> dict[str, Any]:
+    """TOML text as a document (floats as their decimal text), nested at most
+    :data:`MAX_SCENE_DEPTH` deep; anything else raises :class:`SceneError` with field ``what``."""
+    try:
+        data = tomllib.loads(text, parse_float=str)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(what, f"not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(what, f"nested deeper than {MAX_SCENE_DEPTH} tables or lists") from None
+    stack: list[tuple[Any, int]] = [(data, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_SCENE_DEPTH:
+            raise SceneError(what, f"nested deeper than {MAX_SCENE_DEPTH} tables or lists")
+        children = node.values() if isinstance(node, Mapping) else node
+        stack += [(c, depth + 1) for c in children if isinstance(c, Mapping | list)]
+    return data
 
 
 def _plain(data: Any) -> Any:

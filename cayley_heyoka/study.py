@@ -26,7 +26,6 @@ import copy
 import itertools
 import math
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -37,7 +36,7 @@ import numpy as np
 
 from .errors import SceneError
 from .precision import Number, Precision, exact_fraction, fraction_text
-from .scene import Scene, _plain, check_keys, number
+from .scene import Scene, _plain, check_keys, number, read_toml
 
 KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")
@@ -266,11 +265,7 @@ class Study:
 def load_study(path: str | Path) -> Study:
     """Read and validate a study file (TOML; floats kept as their decimal text)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(), parse_float=str)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError("study", f"not valid TOML: {exc}") from None
-    return Study.from_dict(data, path.parent)
+    return Study.from_dict(read_toml(path, "study"), path.parent)
 
 
 # ---------------------------------------------------------------------- internals: parsing
@@ -288,13 +283,7 @@ def _base_scene(spec: Any, base_dir: str | Path | None) -> tuple[dict[str, Any],
             "scene", "is required: a scene file (path relative to the study) or [scene]"
         )
     if isinstance(spec, str):
-        path = Path(base_dir or ".") / spec
-        try:
-            data = tomllib.loads(path.read_text(), parse_float=str)
-        except OSError as exc:
-            raise SceneError("scene", f"cannot read the scene file {str(path)!r}: {exc}") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise SceneError("scene", f"{str(path)!r} is not valid TOML: {exc}") from None
+        data = read_toml(Path(base_dir or ".") / spec, "scene")
         where = f"scene ({spec})"
     elif isinstance(spec, Mapping):
         data, where = _plain(spec), "scene"

@@ -89,7 +89,7 @@ def test_other_refusals():
     )
     refuse(free_body(integrator={"precision": {"bits": 10}}), "integrator.precision.bits", ">= 64")
     refuse(free_body(attitude={"formulation": "euler"}), "attitude.formulation", "must be one of")
-    refuse(free_body(attitude={"max_chart_angle": 180}), "attitude.max_chart_angle", "(0, 180)")
+    refuse(free_body(attitude={"max_chart_angle": 180}), "attitude.max_chart_angle", "[1, 180)")
     refuse(
         free_body(
             forces={"heavy_top": {"weight": 1, "center_of_mass": [0, 0, 1], "up": [0, 0, 2]}}

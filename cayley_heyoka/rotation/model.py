@@ -215,6 +215,12 @@ def _events(scene: Scene, body, inertia, rates, attitude, outputs, pars) -> list
     events: list[EventSpec] = []
     for name in scene.output.events:
         if name == "invariable_plane":
+            if all(exact_fraction(w) == 0 for w in scene.model.rates):
+                raise SceneError(
+                    "output.events",
+                    "invariable_plane is undefined where the angular momentum L is 0, and "
+                    "initial.rates are all zero: remove the event or give the body a rate",
+                )
             if attitude is not None and attitude.plane_events is not None:
                 exprs = attitude.plane_events()
             else:

@@ -15,6 +15,10 @@ from . import attitude as att
 from .forces import parse_forces
 
 FORMULATIONS = ("rodrigues", "quaternion", "none")
+#: Smallest ``attitude.max_chart_angle`` (degrees): each re-basing is a terminal event and a
+#: restart of the propagation, so below a few hundred per turn they cost more than the steps;
+#: at 1e-300 every step re-based and the run never ended.
+MIN_CHART_ANGLE = 1
 _UNIT_TOL = 1e-12
 
 
@@ -81,9 +85,10 @@ class RigidBody:
                 "'none' cannot carry a force function: the torque depends on the attitude",
             )
         angle = number(opts.get("max_chart_angle", 160), "attitude.max_chart_angle")
-        if not 0 < exact_fraction(angle) < 180:
+        if not MIN_CHART_ANGLE <= exact_fraction(angle) < 180:
             raise SceneError(
-                "attitude.max_chart_angle", f"must be in (0, 180) degrees, got {angle}"
+                "attitude.max_chart_angle",
+                f"must be in [{MIN_CHART_ANGLE}, 180) degrees, got {angle}",
             )
         return cls(inertia, rates, attitude, formulation, angle, forces)
 
@@ -98,7 +103,15 @@ class RigidBody:
             return np.array([one, 0 * one, 0 * one, 0 * one])
         kind, value = self.attitude
         if kind == "rodrigues":
-            return np.array(att.rodrigues_to_quaternion(list(precision.array(value))))
+            q = np.array(att.rodrigues_to_quaternion(list(precision.array(value))))
+            # Beyond ~1e154 in double |ρ|² overflows and the quaternion comes out zero.
+            if not abs(np.sum(q * q) - 1) <= 64 * precision.epsilon:
+                raise SceneError(
+                    "initial.rodrigues",
+                    f"cannot be represented in {precision.name}: 1 + |ρ|² overflows; give the "
+                    "attitude as a quaternion or a matrix",
+                )
+            return q
         if kind == "quaternion":
             q = precision.array(value)
             q = q / np.sqrt(np.sum(q * q))
