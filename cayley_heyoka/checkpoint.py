@@ -21,8 +21,10 @@ library version — the last would not reproduce the same bits) is refused rathe
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -34,6 +36,8 @@ from .result import Result, versions
 from .scene import Scene
 
 FORMAT = "cayley_heyoka.checkpoint"
+#: Names of the stretch files.
+SEGMENT = re.compile(r"segment-\d{6,}\.npz")
 
 
 class CheckpointMismatch(ValueError):
@@ -137,7 +141,7 @@ class CheckpointedRun:
         # recomputed: only what a snapshot vouches for is kept.
         done = self.completed()
         for seg in self.workdir.glob("segment-*.npz"):
-            if int(seg.stem.split("-")[1]) > done:
+            if SEGMENT.fullmatch(seg.name) and int(seg.stem.split("-")[1]) > done:
                 seg.unlink()
 
     def _boundary(self, grid: np.ndarray, k: int) -> Any:
@@ -178,6 +182,25 @@ class CheckpointedRun:
             states.append(s)
             pars.append(p)
         return _stack(states), _stack(pars)
+
+
+def remove_checkpoints(workdir: str | Path) -> None:
+    """Delete the files a :class:`CheckpointedRun` writes in ``workdir``, and nothing else.
+
+    The directory itself goes if that leaves it empty; a file someone else put there keeps
+    it (and itself) in place.
+    """
+    workdir = Path(workdir)
+    if not workdir.is_dir():
+        return
+    for path in workdir.iterdir():
+        name = path.name.removesuffix(".tmp")
+        if path.is_file() and (
+            name in ("manifest.json", "snapshot.json") or SEGMENT.fullmatch(name)
+        ):
+            path.unlink()
+    with contextlib.suppress(OSError):  # not empty: what is left is not ours
+        workdir.rmdir()
 
 
 def _stack(parts: list[np.ndarray]) -> np.ndarray:

@@ -536,7 +536,12 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
             _orbit_figure(fig, result)
         else:
             crossings(result, ax=fig.add_subplot())
-    fig.savefig(out, dpi=110)
+    from .files import PNG_SOFTWARE, write_atomically
+
+    fmt_out = out.suffix[1:].lower() or "png"
+    # The Software tag is how a later `plot` recognises a PNG it may replace.
+    tag = {"metadata": {"Software": f"{PNG_SOFTWARE} plot"}} if fmt_out == "png" else {}
+    write_atomically(out, lambda tmp: fig.savefig(tmp, dpi=110, format=fmt_out, **tag))
     return out
 
 
@@ -581,16 +586,24 @@ def add_command(subparsers: Any) -> None:
     parser.add_argument(
         "--out", type=Path, help="figure file to write (default: FILE's stem + _KIND.png)"
     )
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace --out even if it is not a plot of ours"
+    )
     parser.set_defaults(handler=_command)
 
 
 def _command(args: argparse.Namespace) -> int:
+    from .files import OutputError, ResultFileError, check_destination
+
+    path = Path(args.file)
     try:
-        out = plot_file(args.file, args.kind, args.out)
+        out = args.out or path.with_name(f"{path.stem}_{args.kind}.png")
+        check_destination(out, "plot", overwrite=args.overwrite)
+        out = plot_file(args.file, args.kind, out)
     except PlotError as exc:
         print(f"error: {args.file}: {exc}", file=sys.stderr)
         return 2
-    except (ImportError, OSError) as exc:  # matplotlib absent; --out not writable
+    except (ImportError, OSError, OutputError, ResultFileError) as exc:  # says which file
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(f"plot written to {out}")

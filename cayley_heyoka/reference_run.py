@@ -20,20 +20,21 @@ certificate: the estimated absolute error of every variable at every time. How i
 
 Runs go through :class:`~cayley_heyoka.checkpoint.CheckpointedRun` in a work directory beside
 the output (``REF.h5.work``): an interrupted command, run again, continues where it stopped
-and writes the same bits as an uninterrupted one. The work directory is removed once the file
-is written. The file is an ordinary result file (``cayley_heyoka.load_result``) with a
-``certificate`` group and the metadata needed to reproduce it (``metadata["reference"]``).
+and writes the same bits as an uninterrupted one. Once the file is written, the files the runs
+wrote there are removed (and the directory, if nothing else is in it); a ``OUT.work`` that this
+command did not make (it carries the marker file :data:`WORK_MARKER`) is refused, not touched.
+The file is an ordinary result file (``cayley_heyoka.load_result``) with a ``certificate`` group
+and the metadata needed to reproduce it (``metadata["reference"]``).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import json
 import math
-import os
 import platform
-import shutil
 import sys
 import time
 from dataclasses import dataclass, field
@@ -43,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
+from .files import OutputError, check_destination, write_hdf5
 from .precision import Precision
 from .scene import Scene, load_scene
 
@@ -55,6 +57,8 @@ STRETCHES = 64
 _BITS_PER_DIGIT = math.log2(10)
 #: How the certificate is made.
 METHODS = ("auto", "closed-form", "two-precisions")
+#: The file that marks a work directory as made by :func:`generate_reference`.
+WORK_MARKER = ".cayley_heyoka-reference-work"
 
 
 def precision_for(digits: float) -> Precision:
@@ -135,6 +139,7 @@ def generate_reference(
     stretches: int = STRETCHES,
     workdir: str | Path | None = None,
     keep_work: bool = False,
+    overwrite: bool = False,
     method: str = "auto",
     progress: Any = None,
     report: Any = None,
@@ -162,6 +167,9 @@ def generate_reference(
         Where runs are checkpointed; default ``OUT.work`` beside ``out``.
     keep_work
         Keep the work directory after the file is written.
+    overwrite
+        Replace ``out`` even if it is not a result file of ours (see
+        :func:`cayley_heyoka.files.check_destination`).
     method
         ``"auto"`` (the closed form where there is one), ``"closed-form"`` or
         ``"two-precisions"``.
@@ -177,6 +185,12 @@ def generate_reference(
     ReferenceOutcome
         ``certified`` is False when ``max_bits`` was reached first (the file is still written,
         marked so).
+
+    Raises
+    ------
+    OutputError
+        Before anything is integrated: ``out`` may not be written, or ``workdir`` exists and
+        is not a work directory of this function.
     """
     if isinstance(digits, bool) or not isinstance(digits, int) or digits < 1:
         raise ValueError(f"digits must be an integer >= 1, got {digits!r}")
@@ -198,6 +212,8 @@ def generate_reference(
     first = precision or precision_for(digits + GUARD_DIGITS)
     if first.bits > max_bits:
         raise ValueError(f"max_bits ({max_bits}) is below the precision needed ({label(first)})")
+    check_destination(out, "result", overwrite=overwrite)
+    _claim_workdir(workdir)
     say(
         f"plan: {digits} digits; {label(first)} first; certificate "
         + (f"from the closed form ({closed.name})" if closed else "from a second precision")
@@ -287,7 +303,7 @@ def generate_reference(
     }
     _write(out, written, cert, digits, certified, metadata)
     if not keep_work:
-        shutil.rmtree(workdir, ignore_errors=True)
+        _remove_workdir(workdir)
     return ReferenceOutcome(out, certified, cert, written.precision, attempts)
 
 
@@ -502,12 +518,10 @@ def _environment() -> dict[str, str]:
 def _write(
     out: Path, result: Any, cert: Certificate, digits: int, certified: bool, meta: dict
 ) -> None:
-    import h5py
-
     result.metadata = {**result.metadata, "reference": meta}
-    tmp = out.with_name(out.name + ".tmp")
-    result.save(tmp)
-    with h5py.File(tmp, "a") as f:
+
+    def fill(f: Any) -> None:
+        result.fill(f)
         g = f.create_group("certificate")
         g.attrs["method"] = cert.method
         g.attrs["compared_with"] = cert.compared_with
@@ -522,16 +536,54 @@ def _write(
         ge = g.create_group("events")
         for name, err in cert.event_errors.items():
             ge.create_dataset(name, data=err)
-    os.replace(tmp, out)
+
+    write_hdf5(out, fill)
+
+
+def _claim_workdir(workdir: Path) -> None:
+    """Make ``workdir`` ours, or refuse one that someone else made (before any run)."""
+    marker = workdir / WORK_MARKER
+    if marker.is_file():
+        return
+    if workdir.is_dir() and any(workdir.iterdir()):
+        raise OutputError(
+            workdir,
+            "exists and was not made by `cayley-heyoka reference` (no "
+            f"{WORK_MARKER} in it); move it away, it is left untouched",
+        )
+    if workdir.exists() and not workdir.is_dir():
+        raise OutputError(workdir, "exists and is not a directory; move it away")
+    try:
+        workdir.mkdir(parents=True, exist_ok=True)
+        marker.write_text("work directory of cayley-heyoka reference\n")
+    except OSError as exc:
+        raise OutputError(workdir, f"cannot be created ({exc.strerror or exc})") from exc
+
+
+def _remove_workdir(workdir: Path) -> None:
+    """Remove what the runs wrote in ``workdir``; anything else stays, with its directory."""
+    from .checkpoint import remove_checkpoints
+
+    for run_dir in workdir.glob("run-*"):
+        remove_checkpoints(run_dir)
+    (workdir / WORK_MARKER).unlink(missing_ok=True)
+    with contextlib.suppress(OSError):  # not empty: what is left is not ours
+        workdir.rmdir()
 
 
 def read_certificate(path: str | Path) -> dict[str, Any]:
-    """The certificate of a reference file: its attributes, and errors by variable name."""
-    import h5py
+    """The certificate of a reference file: its attributes, and errors by variable name.
 
-    with h5py.File(path, "r") as f:
+    Raises
+    ------
+    ResultFileError
+        The file is not a result file, is damaged, or has no certificate.
+    """
+    from .files import ResultFileError, open_ours
+
+    with open_ours(path, "result") as f:
         if "certificate" not in f:
-            raise ValueError(f"{path}: not a reference file (no certificate group)")
+            raise ResultFileError(path, "not a reference file (no certificate group)")
         g = f["certificate"]
         out: dict[str, Any] = dict(g.attrs)
         out["errors"] = {k: g[k][()] for k in g if k != "events"}
@@ -569,6 +621,11 @@ def add_command(sub: Any) -> None:
         help="closed-form (where there is one), two-precisions, or auto (the first that applies)",
     )
     p.add_argument("--keep-work", action="store_true", help="keep the work directory")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace --out even if it is not a result file of ours",
+    )
     bar = p.add_mutually_exclusive_group()
     bar.add_argument("--progress", action="store_true", default=None, help="show a progress bar")
     bar.add_argument("--no-progress", dest="progress", action="store_false")
@@ -594,6 +651,7 @@ def _main(args: argparse.Namespace) -> int:
             max_bits=args.max_bits,
             stretches=args.checkpoints,
             keep_work=args.keep_work,
+            overwrite=args.overwrite,
             method=args.certificate,
             progress=bar.update if bar else None,
             report=print,

@@ -19,9 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from .files import FORMAT_VERSION, FORMATS, open_ours, write_hdf5
 from .precision import Precision
-
-FORMAT_VERSION = 1
 
 
 @dataclass
@@ -138,44 +137,58 @@ class Result:
 
     # ------------------------------------------------------------------ HDF5
     def save(self, path: str | Path) -> None:
-        """Write the result to an HDF5 file (layout: ``docs/scenes.md``, "Files")."""
-        import h5py
+        """Write the result to an HDF5 file (layout: ``docs/scenes.md``, "Files").
 
+        The file is written under a temporary name and renamed into place, with a checksum
+        of its contents (:mod:`cayley_heyoka.files`): a previous file at ``path`` is replaced
+        whole or not at all.
+
+        Raises
+        ------
+        OutputError
+            When the file cannot be written (the previous one, if any, is left as it was).
+        """
+        write_hdf5(path, self.fill)
+
+    def fill(self, f: Any) -> None:
+        """Write the result's groups and attributes into an open HDF5 file."""
         prec = self.precision
-        with h5py.File(path, "w") as f:
-            f.attrs["format"] = "cayley_heyoka.result"
-            f.attrs["format_version"] = FORMAT_VERSION
-            f.attrs["precision"] = json.dumps(prec.to_spec())
-            f.attrs["status"] = self.status
-            f.attrs["message"] = self.message
-            f.attrs["counters"] = json.dumps(self.counters)
-            f.attrs["conserved"] = json.dumps(list(self.conserved))
-            f.attrs["scene"] = json.dumps(self.scene)
-            f.attrs["metadata"] = json.dumps(self.metadata)
-            write_array(f, "t", self.t, prec)
-            for group, arrays in (("variables", self.variables), ("monitors", self.monitors)):
-                g = f.create_group(group)
-                g.attrs["order"] = json.dumps(list(arrays))
-                for name, arr in arrays.items():
-                    write_array(g, name, arr, prec)
-            ge = f.create_group("events")
-            ge.attrs["order"] = json.dumps(list(self.events))
-            for name, log in self.events.items():
-                g = ge.create_group(name)
-                write_array(g, "time", log.time, prec)
-                g.create_dataset("direction", data=np.asarray(log.direction, dtype=np.int8))
-                g.create_dataset(
-                    "label", data=np.asarray(log.label, dtype=object), dtype=string_dtype()
-                )
+        f.attrs["format"] = FORMATS["result"]
+        f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["precision"] = json.dumps(prec.to_spec())
+        f.attrs["status"] = self.status
+        f.attrs["message"] = self.message
+        f.attrs["counters"] = json.dumps(self.counters)
+        f.attrs["conserved"] = json.dumps(list(self.conserved))
+        f.attrs["scene"] = json.dumps(self.scene)
+        f.attrs["metadata"] = json.dumps(self.metadata)
+        write_array(f, "t", self.t, prec)
+        for group, arrays in (("variables", self.variables), ("monitors", self.monitors)):
+            g = f.create_group(group)
+            g.attrs["order"] = json.dumps(list(arrays))
+            for name, arr in arrays.items():
+                write_array(g, name, arr, prec)
+        ge = f.create_group("events")
+        ge.attrs["order"] = json.dumps(list(self.events))
+        for name, log in self.events.items():
+            g = ge.create_group(name)
+            write_array(g, "time", log.time, prec)
+            g.create_dataset("direction", data=np.asarray(log.direction, dtype=np.int8))
+            g.create_dataset(
+                "label", data=np.asarray(log.label, dtype=object), dtype=string_dtype()
+            )
 
     @classmethod
     def load(cls, path: str | Path) -> Result:
-        """Read a result written by :meth:`save`; extended-precision values load exactly."""
-        import h5py
+        """Read a result written by :meth:`save`; extended-precision values load exactly.
 
-        with h5py.File(path, "r") as f:
-            if f.attrs.get("format") != "cayley_heyoka.result":
-                raise ValueError(f"{path}: not a cayley_heyoka result file")
+        Raises
+        ------
+        ResultFileError
+            Naming the file and what is wrong: missing, not HDF5, not a result file, damaged
+            (its checksum differs) or incomplete. Files of format version 1 load unchecked.
+        """
+        with open_ours(path, "result") as f:
             prec = Precision.from_spec(json.loads(f.attrs["precision"]))
             variables = {
                 k: read_array(f["variables"][k], prec)

@@ -250,6 +250,11 @@ def add_command(subparsers: Any) -> None:
     )
     p.add_argument("study", type=Path, help="study TOML file")
     p.add_argument("--out", type=Path, help="write the sweep to this HDF5 file")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace --out even if it is not a sweep file of ours",
+    )
     p.add_argument("--backend", choices=BACKENDS, help="override [run] backend")
     p.add_argument("--scheduler", help="a Dask scheduler's address (implies --backend dask)")
     p.add_argument("--workers", type=int, help="threads (local) or LocalCluster processes")
@@ -261,6 +266,14 @@ def add_command(subparsers: Any) -> None:
 
 
 def _command(args: Any) -> int:
+    from .files import OutputError, check_destination
+
+    try:
+        if args.out:
+            check_destination(args.out, "sweep", overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     try:
         study = load_study(args.study)
     except (SceneError, OSError) as exc:
@@ -285,7 +298,7 @@ def _command(args: Any) -> int:
     except SceneError as exc:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
-    except (RuntimeError, OSError) as exc:  # a backend that failed midway: the file is kept
+    except (RuntimeError, OSError, OutputError) as exc:  # failed midway: the file is kept
         print(f"error: {exc}", file=sys.stderr)
         if args.out and args.out.exists():
             print(f"what was computed is in {args.out}", file=sys.stderr)

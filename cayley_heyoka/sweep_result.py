@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
+from .files import FORMAT_VERSION, FORMATS, OutputError, Staged, open_ours, seal, write_hdf5
 from .precision import Precision
 from .scene import Scene
 from .study import Member, Study, show_number
 
-FORMAT = "cayley_heyoka.sweep"
-FORMAT_VERSION = 1
+FORMAT = FORMATS["sweep"]
 
 #: Member status codes in :attr:`SweepResult.status`.
 OK, FAILED, NOT_RUN = 0, -1, -2
@@ -167,23 +167,26 @@ class SweepResult:
 
     # ------------------------------------------------------------------ HDF5
     def save(self, path: str | Path) -> None:
-        """Write the sweep file (the layout is documented in docs/tutorials/sweeps.md)."""
-        import h5py
+        """Write the sweep file (the layout is documented in docs/tutorials/sweeps.md).
 
-        with h5py.File(path, "w") as f:
-            _create(f, self)
+        Atomically and with a checksum, as :meth:`Result.save`.
+        """
+        write_hdf5(path, lambda f: _create(f, self))
 
     @classmethod
     def load(cls, path: str | Path) -> SweepResult:
         """Read a sweep file (also one a stopped sweep left: its members not run have status
-        ``NOT_RUN``); extended-precision values load exactly."""
-        import h5py
+        ``NOT_RUN``); extended-precision values load exactly.
 
+        Raises
+        ------
+        ResultFileError
+            The file is missing, not a sweep file, damaged or incomplete (as
+            :meth:`Result.load`).
+        """
         from .result import read_array
 
-        with h5py.File(path, "r") as f:
-            if f.attrs.get("format") != FORMAT:
-                raise ValueError(f"{path}: not a cayley_heyoka sweep file")
+        with open_ours(path, "sweep") as f:
             prec = Precision.from_spec(json.loads(f.attrs["precision"]))
             order = json.loads(f.attrs["order"])
             return cls(
@@ -337,14 +340,28 @@ def _create(f: Any, result: SweepResult) -> None:
 
 
 class Writer:
-    """The sweep file, created with every member ``NOT_RUN`` and filled chunk by chunk."""
+    """The sweep file, created with every member ``NOT_RUN`` and filled chunk by chunk.
+
+    It is filled under a temporary name beside ``path`` and put in place by :meth:`close`
+    (also when the sweep stops midway): a sweep killed outright leaves the previous file.
+    """
 
     def __init__(self, path: str | Path, result: SweepResult) -> None:
         import h5py
 
-        self.file = h5py.File(path, "w")
-        _create(self.file, result)
-        self.file.flush()
+        self.staged = Staged(path)
+        self.file = None
+        try:
+            self.file = h5py.File(self.staged.tmp, "w")
+            _create(self.file, result)
+            self.file.flush()
+        except BaseException as exc:
+            if self.file is not None:
+                self.file.close()
+            self.staged.discard()
+            if isinstance(exc, OSError):
+                raise OutputError(path, f"could not be written ({exc})") from exc
+            raise
 
     def write(self, part: Chunk, prec: Precision) -> None:
         f, rows = self.file, np.asarray(part.index)
@@ -365,8 +382,15 @@ class Writer:
         f.flush()
 
     def close(self, metadata: dict[str, Any]) -> None:
-        self.file.attrs["metadata"] = json.dumps(metadata)
-        self.file.close()
+        try:
+            self.file.attrs["metadata"] = json.dumps(metadata)
+            seal(self.file)
+            self.file.close()
+        except BaseException:
+            self.file.close()
+            self.staged.discard()
+            raise
+        self.staged.commit()
 
 
 def _text(s: Any) -> str:
