@@ -13,6 +13,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -82,10 +83,13 @@ class CheckReport:
         return "\n".join(lines)
 
     def save(self, path: str | Path) -> None:
-        """Write the rows and series to an HDF5 file."""
-        import h5py
+        """Write the rows and series to an HDF5 file (atomically, with a checksum, as
+        :meth:`Result.save <cayley_heyoka.Result.save>`)."""
+        from .files import FORMAT_VERSION, FORMATS, write_hdf5
 
-        with h5py.File(path, "w") as f:
+        def fill(f: Any) -> None:
+            f.attrs["format"] = FORMATS["check"]
+            f.attrs["format_version"] = FORMAT_VERSION
             f.attrs["title"] = self.title
             f.attrs["passed"] = self.passed
             rows = f.create_group("rows")
@@ -98,6 +102,26 @@ class CheckReport:
             series = f.create_group("series")
             for name, values in self.series.items():
                 series.create_dataset(name, data=np.asarray(values, dtype=float))
+
+        write_hdf5(path, fill)
+
+    @classmethod
+    def load(cls, path: str | Path) -> CheckReport:
+        """Read a check file written by :meth:`save` (``ResultFileError`` if it is damaged)."""
+        from .files import open_ours
+
+        with open_ours(path, "check") as f:
+            rows = tuple(
+                CheckRow(
+                    quantity=str(g.attrs["quantity"]),
+                    error=float(g.attrs["error"]),
+                    bound=float(g.attrs["bound"]),
+                    note=str(g.attrs["note"]),
+                )
+                for g in (f["rows"][k] for k in sorted(f["rows"], key=int))
+            )
+            series = {k: np.asarray(v[()], dtype=float) for k, v in f["series"].items()}
+            return cls(title=str(f.attrs["title"]), rows=rows, series=series)
 
 
 def check_scene(scene: Scene) -> CheckReport:

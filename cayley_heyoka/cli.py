@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from importlib import import_module
 from pathlib import Path
@@ -12,6 +13,7 @@ import numpy as np
 from .checks import check_scene
 from .engine import run
 from .errors import IntegrationError, SceneError
+from .files import OutputError, ResultFileError, check_destination, identify
 from .result import Result
 from .scene import load_scene
 
@@ -24,14 +26,56 @@ WORKFLOW_COMMANDS: tuple[str, ...] = (
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``cayley-heyoka`` console script."""
+    """Entry point of the ``cayley-heyoka`` console script.
+
+    What it prints goes through :class:`~cayley_heyoka.terminal.SafeStream` (text from files
+    cannot drive the terminal); output cut short by a closed pipe (``| head``) ends quietly.
+    """
+    from .terminal import SafeStream
+
+    out, err = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = SafeStream(out), SafeStream(err, allow_cr=True)
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # Nothing more can be printed; point stdout at /dev/null so that the interpreter's
+        # final flush does not complain either.
+        _silence(out)
+        return 1
+    finally:
+        sys.stdout, sys.stderr = out, err
+
+
+def _silence(stream: object) -> None:
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, stream.fileno())
+    except (OSError, AttributeError, ValueError):  # not a real file (a test's capture)
+        pass
+
+
+def _version() -> str:
+    from importlib import metadata
+
+    def of(name: str) -> str:
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return "unknown"
+
+    return f"cayley-heyoka {of('cayley_heyoka')} (heyoka {of('heyoka')})"
+
+
+def _main(argv: list[str] | None) -> int:
     parser = argparse.ArgumentParser(
         prog="cayley-heyoka", description="High-accuracy Taylor integration of classical dynamics."
     )
+    parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", required=True)
     p_run = sub.add_parser("run", help="integrate a scene file")
     p_run.add_argument("scene", type=Path, help="scene TOML file")
     p_run.add_argument("--out", type=Path, help="write the result to this HDF5 file")
+    p_run.add_argument("--overwrite", action="store_true", help=_OVERWRITE_HELP)
     bar = p_run.add_mutually_exclusive_group()
     bar.add_argument("--progress", action="store_true", default=None, help="show a progress bar")
     bar.add_argument("--no-progress", dest="progress", action="store_false")
@@ -42,6 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     p_check.add_argument("scene", type=Path, help="scene TOML file")
     p_check.add_argument("--out", type=Path, help="write the check's rows and series to HDF5")
+    p_check.add_argument("--overwrite", action="store_true", help=_OVERWRITE_HELP)
     # The workflows register their own subcommands (each sets ``handler``); their modules
     # import heyoka, h5py or matplotlib only when the command runs.
     for name in WORKFLOW_COMMANDS:
@@ -51,21 +96,61 @@ def main(argv: list[str] | None = None) -> int:
     if getattr(args, "handler", None) is not None:
         return args.handler(args)
     if args.command == "info":
-        print(summary(Result.load(args.result)))
-        return 0
+        return _info(args.result)
     if args.command == "check":
         return _check(args)
     return _run(args)
 
 
+#: Help of every writing command's ``--overwrite``.
+_OVERWRITE_HELP = "replace --out even if it is not a file of ours of the same kind"
+
+
+def _info(path: Path) -> int:
+    from .checks import CheckReport
+    from .sweep_result import SweepResult
+
+    try:
+        kind = identify(path)
+        if kind == "sweep":
+            text = SweepResult.load(path).summary()
+        elif kind == "check":
+            text = CheckReport.load(path).text()
+        else:  # a result, or whatever it is: the loader says what is wrong with it
+            text = summary(Result.load(path))
+    except ResultFileError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(text)
+    return 0
+
+
+def _destination(args: argparse.Namespace, kind: str) -> bool:
+    """Refuse ``--out`` up front (printing why) if it cannot or may not be written."""
+    if not args.out:
+        return True
+    try:
+        check_destination(args.out, kind, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return False
+    return True
+
+
 def _check(args: argparse.Namespace) -> int:
+    if not _destination(args, "check"):
+        return 2
     try:
         report = check_scene(load_scene(args.scene))
     except ValueError as exc:  # SceneError, or a check that cannot be carried through
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
     if args.out:
-        report.save(args.out)
+        try:
+            report.save(args.out)
+        except OutputError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
     print(report.text())
     if args.out:
         print(f"check written to {args.out}")
@@ -73,6 +158,8 @@ def _check(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    if not _destination(args, "result"):
+        return 2
     try:
         scene = load_scene(args.scene)
     except SceneError as exc:
@@ -93,7 +180,12 @@ def _run(args: argparse.Namespace) -> int:
         if bar:
             bar.close()
     if args.out:
-        result.save(args.out)
+        try:
+            result.save(args.out)
+        except OutputError as exc:
+            print(summary(result))
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
     print(summary(result))
     if args.out:
         print(f"result written to {args.out}")
