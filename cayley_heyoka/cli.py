@@ -36,7 +36,9 @@ def main(argv: list[str] | None = None) -> int:
     out, err = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = SafeStream(out), SafeStream(err, allow_cr=True)
     try:
-        return _main(argv)
+        code = _main(argv)
+        out.flush()  # a closed pipe shows here, not in the interpreter's exit
+        return code
     except BrokenPipeError:
         # Nothing more can be printed; point stdout at /dev/null so that the interpreter's
         # final flush does not complain either.
