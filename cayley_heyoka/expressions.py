@@ -5,8 +5,10 @@ functions in :data:`FUNCTIONS`. Nothing is evaluated by Python: the text is pars
 tree and only these nodes are accepted. ``lambda`` may be used as a name (it is the memoir's
 symbol), although it is a Python keyword.
 
-Integer literals become exact constants; other literals become runtime parameters holding the
-literal's decimal text, so ``0.1`` is ``0.1`` in the run's precision, not the nearest double.
+Integer literals become exact constants in the run's floating type (so ``3/5`` is folded to
+the quad 0.6 in a quad run, not to the double 0.6); other literals become runtime parameters
+holding the literal's decimal text, so ``0.1`` is ``0.1`` in the run's precision, not the
+nearest double.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import heyoka as hy
 
 from .errors import SceneError
 from .model import ParTable
+from .precision import exact_fraction
 
 FUNCTIONS = {
     "sin": hy.sin,
@@ -63,7 +66,8 @@ def parse_expression(
     symbols
         The names it may use and the expressions they stand for.
     pars
-        Where non-integer literals are allocated as runtime parameters.
+        Where non-integer literals are allocated as runtime parameters; integer literals are
+        built in its precision.
     field
         The scene field, for error messages.
     """
@@ -101,8 +105,13 @@ def parse_expression(
             if isinstance(node.value, bool):
                 raise SceneError(field, "booleans are not numbers here")
             if isinstance(node.value, int) and abs(node.value) < _EXACT_INT_LIMIT:
-                return hy.expression(float(node.value))
+                # In the run's type: heyoka folds 3/5 in the type of its operands.
+                return pars.constant(node.value)
             literal = ast.get_source_segment(source.strip(), node) or repr(node.value)
+            try:
+                exact_fraction(literal)
+            except ValueError as exc:
+                raise SceneError(field, f"literal {exc}") from None
             counter[0] += 1
             return pars.add(f"{field}#{counter[0]}", literal)
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):

@@ -16,21 +16,37 @@ import hashlib
 import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any
 
 import heyoka as hy
 
-from .precision import Number
+from .precision import Number, Precision
 
 Expr = hy.expression
 
 
 class ParTable:
-    """Runtime parameters of a model: ``add`` returns ``par[i]`` and remembers the value."""
+    """The numbers of a model: runtime parameters, and constants built in its precision.
 
-    def __init__(self) -> None:
+    ``add`` returns ``par[i]`` and remembers the value; ``constant`` returns a number node in
+    the run's floating type (:meth:`Precision.constant`), so that nothing a family writes in
+    its equations (½, 15/8, a literal of a force function) is a double in a quad system.
+
+    Parameters
+    ----------
+    precision
+        The run's precision (double when not given: tests of double systems).
+    """
+
+    def __init__(self, precision: Precision | None = None) -> None:
+        self.precision = precision if precision is not None else Precision()
         self.names: list[str] = []
         self.values: list[Any] = []
+
+    def constant(self, value: int | Fraction | str) -> Expr:
+        """A number node exactly ``value``, or ``value`` correctly rounded in the precision."""
+        return self.precision.constant(value)
 
     def add(self, name: str, value: Number) -> Expr:
         """Allocate a parameter named ``name`` holding ``value``; returns ``par[i]``."""

@@ -8,6 +8,7 @@ would carry the double rounding error of ``1.1`` into a quadruple-precision run;
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
@@ -22,6 +23,20 @@ Number = float | int | str
 """A scene number: a Python float/int, or decimal text kept exact until the target type is known."""
 
 _MIN_BITS = 64
+#: Most significand bits of ``{bits = N}`` (docs/scenes.md, "Numbers"): heyoka's Taylor order
+#: grows with the bits (about 0.35 per bit at the default tolerance), and so do the compiled
+#: code and its compile time; 4096 bits is order ~1420, already minutes to compile.
+MAX_BITS = 4096
+#: Scene numbers are refused beyond these (docs/scenes.md, "Numbers"), before any big integer
+#: is built from them: ``1e999999999`` would otherwise hang building its exact value. The
+#: magnitude bound fits in quad (about 1e±4932) and multiprecision; double checks its own.
+MAX_DECIMAL_EXPONENT = 4000
+MAX_SIGNIFICANT_DIGITS = 4000
+_DIGITS = r"[0-9](?:_?[0-9])*"
+_DECIMAL = re.compile(
+    rf"(?P<sign>[+-]?)(?:(?P<int>{_DIGITS})(?:\.(?P<frac>{_DIGITS})?)?|\.(?P<frac_only>{_DIGITS}))"
+    rf"(?:[eE](?P<exp>[+-]?{_DIGITS}))?"
+)
 
 
 @dataclass(frozen=True)
@@ -45,10 +60,16 @@ class Precision:
         if self.kind in fixed:
             object.__setattr__(self, "bits", fixed[self.kind])
         elif self.kind == "real":
-            if not isinstance(self.bits, int) or self.bits < _MIN_BITS:
+            bits = self.bits
+            if (
+                isinstance(bits, bool)
+                or not isinstance(bits, int)
+                or not _MIN_BITS <= bits <= MAX_BITS
+            ):
                 raise SceneError(
                     "integrator.precision.bits",
-                    f"must be an integer >= {_MIN_BITS} for multiprecision, got {self.bits!r}",
+                    f"must be an integer >= {_MIN_BITS} and <= {MAX_BITS} for multiprecision, "
+                    f"got {bits!r}",
                 )
         else:
             raise SceneError(
@@ -70,7 +91,7 @@ class Precision:
                     "integrator.precision", f"a table must be {{bits = N}}, got {spec!r}"
                 )
             bits = spec["bits"]
-            if isinstance(bits, str) and bits.isdigit():
+            if isinstance(bits, str) and bits.isascii() and bits.isdigit() and len(bits) < 10:
                 bits = int(bits)
             return cls("real", bits)
         raise SceneError(
@@ -111,20 +132,53 @@ class Precision:
         return int(np.ceil(self.bits * np.log10(2.0))) + 2
 
     def number(self, value: Number) -> Any:
-        """Build ``value`` in the target type, from its decimal text when it is a string."""
+        """Build ``value`` in the target type, from its decimal text when it is a string.
+
+        Text follows one grammar in every precision (:func:`decimal_text`). A value that this
+        precision cannot hold (beyond double's range, or so small it would round to zero) is
+        refused with :class:`SceneError` on ``integrator.precision``: the choice of precision
+        is what cannot carry it.
+        """
         if isinstance(value, bool):
             raise TypeError(f"expected a number, got {value!r}")
         if self.kind == "real" and isinstance(value, hy.real) and value.prec == self.bits:
             return value
         if self.kind == "quad" and isinstance(value, hy.real128):
             return value
+        text = decimal_text(value) if isinstance(value, str) else None
         if self.kind == "double":
-            return float(value)
-        if self.kind == "quad":
-            return hy.real128(value if isinstance(value, str) else _exact_text(value))
-        if isinstance(value, str):
-            return hy.real(value, self.bits)
-        return hy.real(_exact_text(value), self.bits)
+            x = float(text if text is not None else value)
+        elif self.kind == "quad":
+            x = hy.real128(text if text is not None else _exact_text(value))
+        else:
+            x = hy.real(text if text is not None else _exact_text(value), self.bits)
+        # Quad and multiprecision hold every magnitude the grammar allows; double does not.
+        if (
+            self.kind == "double"
+            and text is not None
+            and (abs(x) == np.inf or (x == 0) != _is_zero(text))
+        ):
+            raise SceneError(
+                "integrator.precision",
+                f"{self.name} cannot hold {value!r} (it would become {x!r}); choose a "
+                "wider precision or rescale the problem",
+            )
+        return x
+
+    def constant(self, value: int | Fraction | str) -> hy.expression:
+        """A number node of the equations, exactly ``value`` or correctly rounded to it.
+
+        heyoka folds numbers in the type of their nodes: ``3/5`` built from double nodes is the
+        double 0.6 even in a quad system. Equations therefore build every constant here.
+        """
+        if isinstance(value, Fraction) and value.denominator != 1:
+            # Both operands exact, so the division is IEEE/MPFR correctly rounded.
+            if max(abs(value.numerator), value.denominator).bit_length() <= self.bits:
+                return hy.expression(self.number(value.numerator) / self.number(value.denominator))
+            return hy.expression(self.number(fraction_text(value, self)))
+        if isinstance(value, Fraction):
+            value = value.numerator
+        return hy.expression(self.number(value))
 
     def array(self, values: Iterable[Number]) -> np.ndarray:
         """A 1-d numpy array of ``values`` in the target type."""
@@ -170,12 +224,69 @@ def _exact_text(value: Any) -> str:
 
 
 def exact_fraction(value: Number) -> Fraction:
-    """The exact rational value of a scene number (used for validation without rounding)."""
+    """The exact rational value of a scene number (used for validation without rounding).
+
+    Raises
+    ------
+    ValueError
+        If text is not a decimal number (:func:`decimal_text`) or a value is not finite or
+        beyond :data:`MAX_DECIMAL_EXPONENT`.
+    """
     if isinstance(value, bool):
         raise TypeError(f"expected a number, got {value!r}")
     if isinstance(value, str):
-        return Fraction(value.strip().replace("_", ""))
+        mantissa, exponent = _decimal_parts(value)
+        return Fraction(mantissa) * Fraction(10) ** exponent
+    if isinstance(value, int) and value and len(str(abs(value))) - 1 > MAX_DECIMAL_EXPONENT:
+        raise ValueError(f"{value} is larger than 1e{MAX_DECIMAL_EXPONENT}")
     return Fraction(value)
+
+
+def decimal_text(text: str) -> str:
+    """Normalise a scene number written as text, the same way for every precision.
+
+    The grammar is TOML's decimal numbers, also accepting ``1.`` and ``.5``: an optional
+    sign, digits with an optional fraction, an optional exponent ``e±N``; ``_`` may separate
+    two digits. ``inf``, ``nan``, hexadecimal and anything else are refused (``ValueError``),
+    and so are more than :data:`MAX_SIGNIFICANT_DIGITS` digits or a magnitude beyond
+    ``1e±``:data:`MAX_DECIMAL_EXPONENT`, before any big integer is built. Returns
+    ``MANTISSAeEXPONENT`` with an integer mantissa, text every backend reads alike.
+    """
+    mantissa, exponent = _decimal_parts(text)
+    return f"{mantissa}e{exponent}"
+
+
+def _decimal_parts(text: str) -> tuple[int, int]:
+    """(integer mantissa, decimal exponent) of decimal text, within the limits above."""
+    m = _DECIMAL.fullmatch(text.strip())
+    if m is None:
+        raise ValueError(
+            f"{text!r} is not a decimal number (digits, optional fraction and exponent, '_' only "
+            "between digits; no inf, nan or hexadecimal)"
+        )
+    whole = (m["int"] or "").replace("_", "")
+    frac = (m["frac"] or m["frac_only"] or "").replace("_", "")
+    exp_digits = (m["exp"] or "0").replace("_", "").lstrip("+-").lstrip("0") or "0"
+    digits = (whole + frac).lstrip("0")
+    if len(digits) > MAX_SIGNIFICANT_DIGITS:
+        raise ValueError(f"{text[:40]!r}... has more than {MAX_SIGNIFICANT_DIGITS} digits")
+    if not digits:
+        return 0, 0
+    # Digits of the exponent first: int() of a huge digit string is itself the hang.
+    if len(exp_digits) > len(str(MAX_DECIMAL_EXPONENT)) + len(str(MAX_SIGNIFICANT_DIGITS)):
+        raise ValueError(f"{text[:40]!r}: exponent beyond ±{MAX_DECIMAL_EXPONENT}")
+    exponent = int(exp_digits) * (-1 if (m["exp"] or "").startswith("-") else 1) - len(frac)
+    magnitude = exponent + len(digits) - 1
+    if abs(magnitude) > MAX_DECIMAL_EXPONENT:
+        raise ValueError(
+            f"{text[:40]!r} is beyond 1e±{MAX_DECIMAL_EXPONENT} (the limit of scene numbers)"
+        )
+    mantissa = int(digits)
+    return (-mantissa if m["sign"] == "-" else mantissa), exponent
+
+
+def _is_zero(text: str) -> bool:
+    return text.startswith(("0e", "-0e"))
 
 
 def fraction_text(value: Fraction, precision: Precision) -> str:

@@ -71,8 +71,8 @@ def number(value: Any, where: str, *, positive: bool = False, nonneg: bool = Fal
         raise SceneError(where, f"must be a number, got {value!r}")
     try:
         f = exact_fraction(value)
-    except (ValueError, ZeroDivisionError, OverflowError):
-        raise SceneError(where, f"must be a finite number, got {value!r}") from None
+    except (ValueError, OverflowError) as exc:  # text outside the grammar, inf or nan
+        raise SceneError(where, f"must be a finite number: {exc}") from None
     if positive and f <= 0:
         raise SceneError(where, f"must be > 0, got {value}")
     if nonneg and f < 0:

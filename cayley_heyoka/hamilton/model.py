@@ -38,7 +38,7 @@ def build_model(scene: Scene) -> Model:
     n = ham.degrees
     eta = [hy.make_vars(f"eta{i + 1}") for i in range(n)]
     varpi = [hy.make_vars(f"varpi{i + 1}") for i in range(n)]
-    pars = ParTable()
+    pars = ParTable(prec)
     H1, H2 = _split(ham, eta, varpi, pars, prec)
     H = H1 if H2 is None else H1 + H2
     if ham.formulation == "canonical":

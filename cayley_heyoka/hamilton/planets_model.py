@@ -41,7 +41,7 @@ def build_model(scene: Scene) -> Model:
     ham: Hamiltonian = scene.model
     prec = scene.integrator.precision
     n = len(ham.bodies)
-    pars = ParTable()
+    pars = ParTable(prec)
     c = pe.Coefficients(
         ham.constants["G"], ham.constants["central_mass"], [b.mass for b in ham.bodies], pars, prec
     )

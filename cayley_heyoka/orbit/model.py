@@ -46,7 +46,7 @@ def build_model(scene: Scene) -> Model:
     """Turn a validated orbit scene into a :class:`~cayley_heyoka.model.Model`."""
     orbit: Orbit = scene.model
     prec = scene.integrator.precision
-    pars = ParTable()
+    pars = ParTable(prec)
     mu = pars.add("mu", orbit.mu)
     plane = _plane_expressions(orbit.plane, pars)
     X = list(hy.make_vars(*CARTESIAN[:3]))

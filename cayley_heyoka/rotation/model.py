@@ -36,7 +36,7 @@ def build_model(scene: Scene) -> Model:
     """Turn a validated rigid-body scene into a :class:`~cayley_heyoka.model.Model`."""
     body: RigidBody = scene.model
     prec = scene.integrator.precision
-    pars = ParTable()
+    pars = ParTable(prec)
     inertia = [pars.add(name, body.inertia[i]) for i, name in enumerate("ABC")]
     rates = list(hy.make_vars("p", "q", "r"))
     q0 = body.initial_quaternion(prec)
