@@ -10,7 +10,7 @@ report passes when every row does.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -124,38 +124,137 @@ class CheckReport:
             return cls(title=str(f.attrs["title"]), rows=rows, series=series)
 
 
-def check_scene(scene: Scene) -> CheckReport:
-    """Run the consistency check that fits ``scene``.
+class CheckOptions:
+    """Options of a consistency check, as text (``cayley-heyoka check --set KEY=VALUE``).
 
-    * ``hamiltonian`` family: the partial derivatives of the principal function S
-      (:func:`cayley_heyoka.hamilton.principal.check_principal_function`); for the system with
-      one predominant mass, Hamilton's varying elements against the canonical equations
-      (:func:`cayley_heyoka.hamilton.planets_check.check_formulations`).
-    * ``rotation`` family with forces: Cayley's 1846 element equations (62)–(63) against the
-      elements' actual rates (:func:`cayley_heyoka.rotation.element_check.check_element_equations`).
+    A check reads the options it takes with :meth:`text`, :meth:`integer` or :meth:`choice`
+    after declaring them with :meth:`accept`, which refuses any other key, naming the keys the
+    check takes.
+    """
+
+    def __init__(self, values: Mapping[str, str] | None = None) -> None:
+        self.values = dict(values or {})
+
+    def accept(self, keys: tuple[str, ...], check: str) -> None:
+        """Refuse keys that ``check`` does not take."""
+        for key in self.values:
+            if key not in keys:
+                takes = f"takes {', '.join(keys)}" if keys else "takes no options"
+                raise SceneError(f"--set {key}", f"unknown option: the {check} {takes}")
+
+    def text(self, key: str) -> str | None:
+        return self.values.get(key)
+
+    def integer(self, key: str, minimum: int = 1) -> int | None:
+        value = self.values.get(key)
+        if value is None:
+            return None
+        try:
+            number = int(value)
+        except ValueError:
+            number = minimum - 1
+        if number < minimum:
+            raise SceneError(f"--set {key}", f"must be an integer >= {minimum}, got {value!r}")
+        return number
+
+    def choice(self, key: str, choices: tuple[str, ...]) -> str | None:
+        value = self.values.get(key)
+        if value is not None and value not in choices:
+            raise SceneError(f"--set {key}", f"must be one of {', '.join(choices)}, got {value!r}")
+        return value
+
+
+def parse_settings(settings: list[str] | None) -> CheckOptions:
+    """``KEY=VALUE`` strings from the command line as :class:`CheckOptions`."""
+    values: dict[str, str] = {}
+    for item in settings or ():
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise SceneError("--set", f"expected KEY=VALUE, got {item!r}")
+        values[key.strip()] = value.strip()
+    return CheckOptions(values)
+
+
+def round_off_scale(steps: int, epsilon: float, tolerance: float | None = None) -> float:
+    """Brouwer's law for the error a run's steps add up to: 10 ε √N.
+
+    Each of N steps rounds the state by about ε relative, in directions that are as good as
+    random, so the errors add like a random walk; 10 is the safety factor every check uses.
+    A tolerance above ε adds truncation errors, which are systematic: they add linearly.
+    """
+    extra = max(0.0, (tolerance or 0.0) - epsilon) * steps
+    return 10 * (epsilon * math.sqrt(max(steps, 1)) + extra)
+
+
+def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckReport:
+    """Run the consistency check of ``scene``'s family.
+
+    Each family names its check in the registry (:attr:`cayley_heyoka.families.Family.
+    consistency_check`); the checks, by family, are listed in docs/scenes.md ("Consistency
+    checks").
+
+    Parameters
+    ----------
+    scene
+        The scene.
+    options
+        The check's options (``--set KEY=VALUE``); each check says which it takes.
 
     Raises
     ------
     SceneError
-        When no check applies to the scene.
+        When the scene's family has no check, or an option is unknown or malformed.
     ValueError
-        When the check cannot be carried through (e.g. a forced body whose free motion stops
-        passing Cayley's υ₀), naming the reason.
+        When the check cannot be carried through, naming the reason.
     """
-    if scene.family == "hamiltonian" and scene.model.model == "predominant_mass":
-        from .hamilton.planets_check import check_formulations
+    from .families import FAMILIES
 
-        return check_formulations(scene)
-    if scene.family == "hamiltonian":
-        from .hamilton.principal import check_principal_function
+    check = FAMILIES[scene.family].consistency_check
+    if check is None:
+        raise SceneError("scene", f"no consistency check for the {scene.family} family")
+    return check(scene, options or CheckOptions())
 
-        return check_principal_function(scene).report()
-    if scene.family == "rotation" and scene.model.forces:
-        from .rotation.element_check import check_element_equations
 
-        return check_element_equations(scene)
-    raise SceneError(
-        "scene",
-        f"no consistency check for this {scene.family} scene; `check` covers hamiltonian scenes "
-        "and rotation scenes with forces",
-    )
+def flow_sensitivity(
+    evaluate: Callable[[int | None, Any], Mapping[str, Any]],
+    directions: int,
+    times: Sequence[Any],
+    delta: Any,
+) -> dict[str, float]:
+    """How far a closed form's solution moves per unit change of its initial state.
+
+    Parameters
+    ----------
+    evaluate
+        ``evaluate(direction, t)``: the solution at ``t`` from the initial state moved by
+        ``delta`` (times the check's scale of that component) along ``direction``, or from
+        the initial state itself for ``None``; a mapping of quantity names to numbers or
+        vectors (sequences; their change is measured by its length).
+    directions
+        Number of perturbation directions (together they span the state).
+    times
+        Times at which to measure.
+    delta
+        Size of the perturbation: small enough to stay linear, large against the closed
+        form's own error.
+
+    Returns
+    -------
+    dict
+        For each quantity, max over directions and times of ``|Δ quantity| / delta``: the
+        factor by which the flow carries an error of the initial state (and so, Brouwer's
+        argument, any step's round-off) to that quantity.
+    """
+    out: dict[str, float] = {}
+    for t in times:
+        base = evaluate(None, t)
+        for d in range(directions):
+            moved = evaluate(d, t)
+            for name, value in base.items():
+                if isinstance(value, Sequence):  # a vector: the length of its change
+                    diff = [a - b for a, b in zip(moved[name], value, strict=True)]
+                    change = float(sum(d * d for d in diff) ** 0.5 / delta)
+                else:
+                    change = float(abs(moved[name] - value) / delta)
+                out[name] = max(out.get(name, 0.0), change)
+    return out

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import check_scene
+from .checks import check_scene, parse_settings
 from .engine import run
 from .errors import IntegrationError, SceneError
 from .files import OutputError, ResultFileError, check_destination, identify
@@ -88,6 +88,13 @@ def _main(argv: list[str] | None) -> int:
     )
     p_check.add_argument("scene", type=Path, help="scene TOML file")
     p_check.add_argument("--out", type=Path, help="write the check's rows and series to HDF5")
+    p_check.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="an option of the scene's check, e.g. upsilon0=2.5 or twin=quaternion "
+        "(repeatable; docs/scenes.md, 'Consistency checks')",
+    )
     p_check.add_argument("--overwrite", action="store_true", help=_OVERWRITE_HELP)
     # The workflows register their own subcommands (each sets ``handler``); their modules
     # import heyoka, h5py or matplotlib only when the command runs.
@@ -143,10 +150,13 @@ def _check(args: argparse.Namespace) -> int:
     if not _destination(args, "check"):
         return 2
     try:
-        report = check_scene(load_scene(args.scene))
+        report = check_scene(load_scene(args.scene), parse_settings(args.set))
     except ValueError as exc:  # SceneError, or a check that cannot be carried through
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
+    except IntegrationError as exc:  # a run the check needs stopped early
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 1
     if args.out:
         try:
             report.save(args.out)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from importlib import import_module
 from typing import Any
 
 from .errors import SceneError
@@ -11,8 +12,9 @@ from .errors import SceneError
 
 @dataclass(frozen=True)
 class Family:
-    """A model family: its scene tables, the table that identifies it, parse, build and the
-    checks that need the whole scene (e.g. the start time)."""
+    """A model family: its scene tables, the table that identifies it, parse, build, the
+    checks that need the whole scene (e.g. the start time) and its consistency check
+    (``consistency_check(scene, options) -> CheckReport``, ``cayley-heyoka check``)."""
 
     name: str
     key_table: str
@@ -21,6 +23,16 @@ class Family:
     build: Callable[[Any], Any]
     check: Callable[[Any], None] | None = None
     output_keys: tuple[str, ...] = ()
+    consistency_check: Callable[[Any, Any], Any] | None = None
+
+
+def _later(module: str, name: str) -> Callable[[Any, Any], Any]:
+    """``module.name``, imported when first called: the checks import the families."""
+
+    def call(scene: Any, options: Any) -> Any:
+        return getattr(import_module(module, __package__), name)(scene, options)
+
+    return call
 
 
 def _rotation() -> Family:
@@ -28,7 +40,12 @@ def _rotation() -> Family:
     from .rotation.scene import RigidBody
 
     return Family(
-        "rotation", "body", ("body", "initial", "attitude", "forces"), RigidBody.parse, build_model
+        "rotation",
+        "body",
+        ("body", "initial", "attitude", "forces"),
+        RigidBody.parse,
+        build_model,
+        consistency_check=_later(".rotation.closed_form_check", "check_rotation"),
     )
 
 
@@ -37,7 +54,15 @@ def _orbit() -> Family:
     from .orbit.scene import Orbit
 
     tables = ("orbit", "perturbations", "reference_plane")
-    return Family("orbit", "orbit", tables, Orbit.parse, build_model, check)
+    return Family(
+        "orbit",
+        "orbit",
+        tables,
+        Orbit.parse,
+        build_model,
+        check,
+        consistency_check=_later(".orbit.cartesian_check", "check_orbit"),
+    )
 
 
 def _hamiltonian() -> Family:
@@ -52,6 +77,7 @@ def _hamiltonian() -> Family:
         Hamiltonian.parse,
         build_model,
         output_keys=("principal_function",),
+        consistency_check=_later(".hamilton.projectile_check", "check_hamiltonian"),
     )
 
 
