@@ -23,10 +23,11 @@ Number = float | int | str
 """A scene number: a Python float/int, or decimal text kept exact until the target type is known."""
 
 _MIN_BITS = 64
-#: Most significand bits of ``{bits = N}`` (docs/scenes.md, "Numbers"): heyoka's Taylor order
-#: grows with the bits (about 0.35 per bit at the default tolerance), and so do the compiled
-#: code and its compile time; 4096 bits is order ~1420, already minutes to compile.
-MAX_BITS = 4096
+#: Most significand bits of ``{bits = N}`` (docs/scenes.md, "Numbers"). heyoka's Taylor order
+#: grows with the bits and the compile time faster (one time unit of a free body: 3.4 s at 1024
+#: bits, 39 s at 2048); and the round-off scales of the checks use :attr:`Precision.epsilon`
+#: as a double, which underflows to 0 beyond 1074 bits.
+MAX_BITS = 1024
 #: Scene numbers are refused beyond these (docs/scenes.md, "Numbers"), before any big integer
 #: is built from them: ``1e999999999`` would otherwise hang building its exact value. The
 #: magnitude bound fits in quad (about 1e±4932) and multiprecision; double checks its own.
@@ -69,7 +70,7 @@ class Precision:
                 raise SceneError(
                     "integrator.precision.bits",
                     f"must be an integer >= {_MIN_BITS} and <= {MAX_BITS} for multiprecision, "
-                    f"got {bits!r}",
+                    f"got {bits!r:.40}",
                 )
         else:
             raise SceneError(
@@ -146,21 +147,21 @@ class Precision:
         if self.kind == "quad" and isinstance(value, hy.real128):
             return value
         text = decimal_text(value) if isinstance(value, str) else None
-        if self.kind == "double":
-            x = float(text if text is not None else value)
-        elif self.kind == "quad":
-            x = hy.real128(text if text is not None else _exact_text(value))
-        else:
-            x = hy.real(text if text is not None else _exact_text(value), self.bits)
+        if self.kind == "quad":
+            return hy.real128(text if text is not None else _exact_text(value))
+        if self.kind == "real":
+            return hy.real(text if text is not None else _exact_text(value), self.bits)
+        if text is None and not isinstance(value, int):
+            return float(value)
         # Quad and multiprecision hold every magnitude the grammar allows; double does not.
-        if (
-            self.kind == "double"
-            and text is not None
-            and (abs(x) == np.inf or (x == 0) != _is_zero(text))
-        ):
+        try:
+            x = float(text if text is not None else value)
+        except OverflowError:  # an integer beyond double's range
+            x = np.inf
+        if abs(x) == np.inf or (x == 0) != (exact_fraction(value) == 0):
             raise SceneError(
                 "integrator.precision",
-                f"{self.name} cannot hold {value!r} (it would become {x!r}); choose a "
+                f"{self.name} cannot hold {value!r:.60} (it would become {x!r}); choose a "
                 "wider precision or rescale the problem",
             )
         return x
@@ -184,7 +185,7 @@ class Precision:
         """A 1-d numpy array of ``values`` in the target type."""
         values = list(values)
         if self.kind == "double":
-            return np.array([float(v) for v in values], dtype=float)
+            return np.array([self.number(v) for v in values], dtype=float)
         # The dtype is explicit: an empty list would otherwise become float64, which heyoka's
         # compiled functions refuse for real128 and real.
         return np.array([self.number(v) for v in values], dtype=self.fp_type)
@@ -201,7 +202,15 @@ class Precision:
         """Inverse of :meth:`to_text`."""
         texts = np.asarray(texts)
         flat = [t.decode() if isinstance(t, bytes) else str(t) for t in texts.ravel()]
-        return self.array(flat).reshape(texts.shape)
+        # Our own text, not a scene's: it may hold the nan or inf of a run that failed, which
+        # the scene grammar (number) refuses.
+        if self.kind == "double":
+            values = np.array([float(t) for t in flat], dtype=float)
+        elif self.kind == "quad":
+            values = np.array([hy.real128(t) for t in flat], dtype=self.fp_type)
+        else:
+            values = np.array([hy.real(t, self.bits) for t in flat], dtype=self.fp_type)
+        return values.reshape(texts.shape)
 
 
 def _exact_text(value: Any) -> str:
@@ -285,8 +294,47 @@ def _decimal_parts(text: str) -> tuple[int, int]:
     return (-mantissa if m["sign"] == "-" else mantissa), exponent
 
 
-def _is_zero(text: str) -> bool:
-    return text.startswith(("0e", "-0e"))
+def exceeds_pi(value: Number) -> bool:
+    """Whether a scene number is larger than π, decided exactly.
+
+    A bound ``<= math.pi`` would refuse π written to 40 digits (the double is below π) in a
+    quad run, and accept values between the double and π in none. The exact value written is
+    compared with π, which is irrational: the digits of π are raised until the difference
+    shows (a scene number has at most :data:`MAX_SIGNIFICANT_DIGITS` digits, so this ends).
+    """
+    import mpmath
+
+    f = exact_fraction(value)
+    if f <= 3:
+        return False
+    if f >= 4:
+        return True
+    dps = 50
+    while True:
+        with mpmath.workdps(dps):
+            difference = mpmath.mpf(f.numerator) / f.denominator - mpmath.pi
+            if abs(difference) > mpmath.mpf(10) ** (10 - dps):
+                return difference > 0
+        dps *= 2
+
+
+def normalised(values: Iterable[Number], precision: Precision) -> tuple[Number, ...]:
+    """``v / |v|`` correctly rounded in ``precision`` (as decimal text with guard digits).
+
+    A direction accepted to 1e-12 of unit length (:func:`cayley_heyoka.scene.unit_vector`)
+    and used as written would carry that error into a quad run; one of exactly unit length
+    (``[0, 0.6, 0.8]``) is returned as written.
+    """
+    import mpmath
+
+    values = tuple(values)
+    exact = [exact_fraction(v) for v in values]
+    if sum(f * f for f in exact) == 1:
+        return values
+    with mpmath.workdps(precision.dps + 15):
+        v = [mpmath.mpf(f.numerator) / f.denominator for f in exact]
+        norm = mpmath.sqrt(sum(x * x for x in v))
+        return tuple(mpmath.nstr(x / norm, precision.dps + 10, strip_zeros=False) for x in v)
 
 
 def fraction_text(value: Fraction, precision: Precision) -> str:

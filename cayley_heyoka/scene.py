@@ -88,7 +88,8 @@ def vector(value: Any, where: str, length: int) -> tuple[Number, ...]:
 
 
 def unit_vector(value: Any, where: str) -> tuple[Number, ...]:
-    """A 3-vector of unit length (to 1e-12), so that no direction is silently rescaled."""
+    """A 3-vector of unit length to 1e-12 (a guard against typos, not a rescaling: the model
+    normalises it in the run's precision, :func:`cayley_heyoka.precision.normalised`)."""
     v = vector(value, where, 3)
     norm2 = float(sum(exact_fraction(c) ** 2 for c in v))
     if abs(math.sqrt(norm2) - 1.0) > 1e-12:

@@ -17,7 +17,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -29,7 +28,7 @@ from ..expressions import uses_time
 from ..orbit.elements import Elements
 from ..orbit.frames import cross, dot
 from ..orbit.scene import ELEMENT_KEYS
-from ..precision import Number, exact_fraction
+from ..precision import Number, exact_fraction, exceeds_pi
 from ..scene import check_keys, number, vector
 from . import planets
 
@@ -317,7 +316,7 @@ def _elements(table: Any, where: str, formulation: str) -> dict[str, Number]:
             "'canonical')",
         )
     inclination = exact_fraction(values["inclination"])
-    if not 0 <= inclination <= math.pi:
+    if inclination < 0 or exceeds_pi(values["inclination"]):
         raise SceneError(f"{where}.inclination", f"must be in [0, π], got {values['inclination']}")
     if formulation == "elements":
         if e == 0:

@@ -26,7 +26,6 @@ scenes differing only in numbers share one compiled integrator.
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -38,7 +37,7 @@ import mpmath
 from ..errors import SceneError
 from ..expressions import parse_expression, uses_time
 from ..model import ParTable
-from ..precision import Number, exact_fraction
+from ..precision import Number, exact_fraction, exceeds_pi
 from ..scene import check_keys, number, vector
 from . import frames
 
@@ -198,7 +197,7 @@ class ThirdBody:
                 f"{where}.eccentricity", f"must be in [0, 1) for an elliptic orbit, got {e}"
             )
         inc = number(table.get("inclination", 0), f"{where}.inclination")
-        if not 0 <= exact_fraction(inc) <= math.pi:
+        if exact_fraction(inc) < 0 or exceeds_pi(inc):
             raise SceneError(f"{where}.inclination", f"must be in [0, π], got {inc}")
         if "mean_anomaly0" in table and "mean_longitude0" in table:
             raise SceneError(

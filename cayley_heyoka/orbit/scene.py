@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from ..errors import SceneError
-from ..precision import Number, exact_fraction
+from ..precision import Number, exact_fraction, exceeds_pi
 from ..scene import check_keys, number, vector
 from .disturbing import ThirdBody, Zonal, parse_perturbations
 
@@ -152,7 +151,8 @@ def _parse_initial(table: Mapping[str, Any]) -> tuple:
                 f"must be in [0, 1) for an elliptic element set, got {values['e']}; give a "
                 "hyperbolic or parabolic orbit by position and velocity",
             )
-        if not 0 <= exact_fraction(values["inclination"]) <= math.pi:
+        inclination = values["inclination"]
+        if exact_fraction(inclination) < 0 or exceeds_pi(inclination):
             raise SceneError(
                 "orbit.elements.inclination", f"must be in [0, π], got {values['inclination']}"
             )

@@ -17,6 +17,7 @@ import heyoka as hy
 from ..errors import SceneError
 from ..expressions import parse_expression, uses_time
 from ..model import ParTable
+from ..precision import normalised
 from ..scene import check_keys, number, unit_vector, vector
 from .attitude import Matrix
 
@@ -42,7 +43,7 @@ class HeavyTop:
     """Uniform gravity on a body whose centre of mass is off the fixed point.
 
     ``V = −Mg (û · R c)``: ``weight`` = Mg, ``center_of_mass`` = c in body axes, ``up`` = the unit
-    vertical û in space axes (gravity is −Mg û).
+    vertical û in space axes (gravity is −Mg û), normalised in the run's precision.
     """
 
     weight: Any
@@ -67,7 +68,8 @@ class HeavyTop:
         c = [
             ctx.pars.add(f"heavy_top.center_of_mass[{j}]", self.center_of_mass[j]) for j in range(3)
         ]
-        u = [ctx.pars.add(f"heavy_top.up[{i}]", self.up[i]) for i in range(3)]
+        up = normalised(self.up, ctx.pars.precision)
+        u = [ctx.pars.add(f"heavy_top.up[{i}]", up[i]) for i in range(3)]
         height = sum(u[i] * sum(ctx.R[i][j] * c[j] for j in range(3)) for i in range(3))
         return -Mg * height
 
@@ -77,8 +79,8 @@ class GravityGradient:
     """The tidal torque of a distant point mass (MacCullagh's approximation).
 
     ``V = −(3 GM / 2d³) ûᵦ · I ûᵦ`` with ``ûᵦ = Rᵀ û`` the body components of the unit vector û
-    (space axes) from the fixed point to the mass, ``gm`` = GM, ``distance`` = d. The torque is
-    ``N = (3 GM/d³) ûᵦ × I ûᵦ``.
+    (space axes, normalised in the run's precision) from the fixed point to the mass, ``gm`` =
+    GM, ``distance`` = d. The torque is ``N = (3 GM/d³) ûᵦ × I ûᵦ``.
     """
 
     gm: Any
@@ -101,7 +103,8 @@ class GravityGradient:
     def potential(self, ctx: ForceContext) -> Expr:
         gm = ctx.pars.add("gravity_gradient.gm", self.gm)
         d = ctx.pars.add("gravity_gradient.distance", self.distance)
-        u = [ctx.pars.add(f"gravity_gradient.direction[{i}]", self.direction[i]) for i in range(3)]
+        direction = normalised(self.direction, ctx.pars.precision)
+        u = [ctx.pars.add(f"gravity_gradient.direction[{i}]", direction[i]) for i in range(3)]
         ub = [sum(ctx.R[i][j] * u[i] for i in range(3)) for j in range(3)]
         quad = sum(ctx.inertia[j] * ub[j] * ub[j] for j in range(3))
         return -1.5 * gm / (d * d * d) * quad
