@@ -7,6 +7,7 @@ import os
 import sys
 from importlib import import_module
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -205,17 +206,37 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _progress_bar(scene):
+    grid = scene.output.time_grid(scene.integrator.precision)
+    return time_bar(float(grid[0]), float(grid[-1]))
+
+
+def time_bar(t0: float, t1: float, desc: str | None = None, file: Any = None) -> Any:
+    """A progress bar of simulated time on stderr: ``t = 3141.59 of 6283.19  50%``.
+
+    ``update_to(t)`` moves it to time ``t``; times are shown to six significant digits (the
+    bar's own counter, t − t0, would print every digit of a float).
+    """
     from tqdm import tqdm
 
-    grid = scene.output.time_grid(scene.integrator.precision)
-    t0, t1 = float(grid[0]), float(grid[-1])
-
     class Bar(tqdm):
+        @property
+        def format_dict(self) -> dict:
+            d = super().format_dict
+            d["t_now"], d["t_end"] = f"{t0 + d['n']:.6g}", f"{t1:.6g}"
+            return d
+
         def update_to(self, t: float) -> None:
-            self.n = round(t - t0, 6)
+            self.n = min(max(float(t) - t0, 0.0), self.total)
             self.refresh() if self.n >= self.total else self.update(0)
 
-    return Bar(total=t1 - t0, unit="t", file=sys.stderr, mininterval=0.2, dynamic_ncols=True)
+    label = f"{desc}: " if desc else ""
+    return Bar(
+        total=t1 - t0,
+        file=file or sys.stderr,
+        mininterval=0.2,
+        dynamic_ncols=True,
+        bar_format=label + "t = {t_now} of {t_end} {percentage:4.0f}%|{bar}| {elapsed}<{remaining}",
+    )
 
 
 def summary(result: Result) -> str:

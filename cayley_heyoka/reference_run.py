@@ -700,16 +700,13 @@ class _Bars:
         self.label = None
 
     def update(self, label: str, t: float) -> None:
-        from tqdm import tqdm
+        from .cli import time_bar
 
         if label != self.label:
             self.close()
             self.label = label
-            self.bar = tqdm(
-                total=self.t1 - self.t0, unit="t", desc=label, file=sys.stderr, mininterval=0.2
-            )
-        self.bar.n = round(float(t) - self.t0, 6)
-        self.bar.update(0)
+            self.bar = time_bar(self.t0, self.t1, desc=label)
+        self.bar.update_to(t)
 
     def close(self) -> None:
         if self.bar is not None:

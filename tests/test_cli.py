@@ -166,3 +166,12 @@ def test_check_that_cannot_be_carried_through_says_why(capsys):
     path = str(EXAMPLES / "heavy_top.toml")
     assert main(["check", path, "--set", "method=elements"]) == 2
     assert "upsilon0" in capsys.readouterr().err
+
+
+def test_progress_bar_shows_simulated_time_and_percentage(capsys):
+    """planets.toml stops at 2000π: the bar prints t to six digits, not every digit of the
+    float, and the percentage."""
+    assert main(["run", str(EXAMPLES / "planets.toml"), "--progress"]) == 0
+    err = capsys.readouterr().err
+    assert "t = 6283.19 of 6283.19  100%" in err
+    assert "6283.185307" not in err
