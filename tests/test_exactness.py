@@ -176,7 +176,15 @@ def inexact_numbers(expr: hy.expression, bits: int) -> list[str]:
     with sympy.evaluate(False):
         tree = hy.to_sympy(expr)
     bad = []
-    for node in sympy.preorder_traversal(tree):
+    # Depth first, each node once: heyoka's trees share subexpressions (the planets' system is
+    # 1.4 million nodes walked naively, a few thousand distinct ones).
+    seen, stack = set(), [tree]
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        stack.extend(node.args)
         if not isinstance(node, sympy.Float):
             continue  # integers, and the ½ of sqrt, are exact in every type
         prec, significant = node._prec, node._mpf_[3]
