@@ -299,7 +299,7 @@ def open_ours(path: str | Path, kind: str) -> Iterator[Any]:
         raise ResultFileError(path, "is a directory, not a file")
     try:
         f = h5py.File(path, "r")
-    except OSError as exc:
+    except (OSError, RuntimeError, ValueError) as exc:
         size = path.stat().st_size
         what = "empty file" if size == 0 else f"not an HDF5 file, or a truncated one ({size} bytes)"
         raise ResultFileError(path, what) from exc
@@ -311,7 +311,16 @@ def open_ours(path: str | Path, kind: str) -> Iterator[Any]:
             if exc.path != path:
                 raise ResultFileError(path, exc.what) from exc
             raise
-        except (KeyError, ValueError, TypeError, OSError, IndexError, AttributeError) as exc:
+        except (
+            KeyError,
+            ValueError,
+            TypeError,
+            OSError,
+            IndexError,
+            RuntimeError,
+            AttributeError,
+        ) as exc:
+            # HDF5 reports damaged structures as any of these (RuntimeError: a bad B-tree).
             raise ResultFileError(path, f"damaged or incomplete {kind} file: {exc}") from exc
 
 

@@ -562,14 +562,16 @@ def _file_format(path: Path) -> str:
 
 
 def _read_sweep(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], str]:
-    import h5py
+    from .files import open_ours
 
-    with h5py.File(path, "r") as f:
-        if "t" not in f or "drift" not in f or not len(f["drift"]):
-            raise PlotError("a sweep file needs a dataset t and a non-empty group drift")
-        t = np.asarray(f["t"][()], dtype=np.float64)  # quad and real sweeps store decimal text
-        series = {name: np.asarray(ds[()], dtype=np.float64) for name, ds in f["drift"].items()}
-        study = json.loads(f.attrs["study"]) if "study" in f.attrs else {}
+    with open_ours(path, "sweep") as f:  # checksum verified: a damaged file is not drawn
+        complete = "t" in f and "drift" in f and len(f["drift"])
+        if complete:
+            t = np.asarray(f["t"][()], dtype=np.float64)  # decimal text beyond double
+            series = {name: np.asarray(d[()], dtype=np.float64) for name, d in f["drift"].items()}
+            study = json.loads(f.attrs["study"]) if "study" in f.attrs else {}
+    if not complete:
+        raise PlotError("a sweep file needs a dataset t and a non-empty group drift")
     return t, series, study.get("title") or f"sweep {path.name}"
 
 

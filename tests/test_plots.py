@@ -147,6 +147,7 @@ def test_sweep_file_from_the_command_line(tmp_path, capsys):
     t = np.linspace(0.0, 10.0, 11)
     with h5py.File(path, "w") as f:
         f.attrs["format"] = "cayley_heyoka.sweep"
+        f.attrs["format_version"] = 1  # before checksums: read unchecked
         f.attrs["study"] = '{"title": "Energy drift of four members"}'
         f["t"] = t
         f.create_group("drift")["energy"] = np.outer(np.arange(1.0, 5.0), t) * 1e-16
