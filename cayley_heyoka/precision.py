@@ -33,6 +33,7 @@ MAX_BITS = 1024
 #: magnitude bound fits in quad (about 1e±4932) and multiprecision; double checks its own.
 MAX_DECIMAL_EXPONENT = 4000
 MAX_SIGNIFICANT_DIGITS = 4000
+_INTEGER_LIMIT = 10 ** (MAX_DECIMAL_EXPONENT + 1)  # the first integer of magnitude 1e4001
 _DIGITS = r"[0-9](?:_?[0-9])*"
 _DECIMAL = re.compile(
     rf"(?P<sign>[+-]?)(?:(?P<int>{_DIGITS})(?:\.(?P<frac>{_DIGITS})?)?|\.(?P<frac_only>{_DIGITS}))"
@@ -246,8 +247,12 @@ def exact_fraction(value: Number) -> Fraction:
     if isinstance(value, str):
         mantissa, exponent = _decimal_parts(value)
         return Fraction(mantissa) * Fraction(10) ** exponent
-    if isinstance(value, int) and value and len(str(abs(value))) - 1 > MAX_DECIMAL_EXPONENT:
-        raise ValueError(f"{value} is larger than 1e{MAX_DECIMAL_EXPONENT}")
+    if isinstance(value, int) and abs(value) >= _INTEGER_LIMIT:
+        # Not printed: Python refuses to print an integer of more than 4300 digits.
+        raise ValueError(
+            f"an integer of {abs(value).bit_length()} bits is beyond 1e±{MAX_DECIMAL_EXPONENT} "
+            "(the limit of scene numbers)"
+        )
     return Fraction(value)
 
 

@@ -233,3 +233,11 @@ def test_a_direction_far_from_unit_is_refused():
     with pytest.raises(SceneError) as exc:
         Scene.from_dict(copy.deepcopy(d))
     assert exc.value.field == "forces.heavy_top.up"
+
+
+@pytest.mark.parametrize("value", [10**4001, -(10**10_000)], ids=["1e4001", "-1e10000"])
+def test_an_integer_beyond_the_limit_is_refused_without_printing_it(value):
+    with pytest.raises(SceneError) as exc:
+        Scene.from_dict(free_body(value, 1, 1))
+    assert exc.value.field == "body.inertia[0]"
+    assert "beyond 1e±4000" in exc.value.constraint and len(str(exc.value)) < 200
