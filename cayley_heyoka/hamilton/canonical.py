@@ -1,6 +1,7 @@
 """Hamilton's canonical equations and the principal function, as heyoka expressions.
 
-Symbols (Hamilton 1835, ``../shared/notes/hamilton1835.md`` §0–§1): ηᵢ the coordinates, ϖᵢ
+Symbols (Hamilton 1835, *Second Essay on a General Method in Dynamics*, (A.), (19.)–(23.);
+docs/hamilton.md): ηᵢ the coordinates, ϖᵢ
 their conjugate momenta, H(η, ϖ, t) the Hamiltonian (T − U, with U Lagrange's force function),
 e and p the values of η and ϖ at the start time. The canonical equations (A.) are
 

@@ -1,8 +1,9 @@
 """Hamilton's varying elements: H = H₁ + H₂, the flow of H₁ known, the elements integrated.
 
-Symbols (notes ``hamilton1835.md`` §3–§4): H₁ the undisturbed Hamiltonian, whose motion is
-known in closed form, and H₂ the disturbing part. The elements χᵢ, λᵢ are the initial data
-that the undisturbed motion would need to pass through the current state (70.)–(73.):
+Symbols (Hamilton 1835, Second Essay, §8–9 and §13–18; docs/hamilton.md): H₁ the undisturbed
+Hamiltonian, whose motion is known in closed form, and H₂ the disturbing part. The elements χᵢ, λᵢ
+are the initial data that the undisturbed motion would need to pass through the current state
+(70.)–(73.):
 
     ηᵢ = φᵢ(χ, λ, t),    ϖᵢ = ψᵢ(χ, λ, t)         (the flow of H₁, with φ = χ, ψ = λ at t = 0).
 
@@ -70,7 +71,7 @@ def lagrange_brackets(
     """[a, b] = Σᵢ (∂ηᵢ/∂a ∂ϖᵢ/∂b − ∂ηᵢ/∂b ∂ϖᵢ/∂a) over the elements (χ, λ), symbolically.
 
     Canonical elements have [χᵢ, λₖ] = δᵢₖ and the others zero; the Poisson brackets (z, z′) of
-    (C′.) are then canonical too (P = (Lᵀ)⁻¹, notes §4.3).
+    (C′.) are then canonical too (P = (Lᵀ)⁻¹; Hamilton's theorem, Second Essay §14–15).
     """
     z = [*chi, *lam]
     d_eta = [[hy.diff(f, v) for v in z] for f in flow_eta]

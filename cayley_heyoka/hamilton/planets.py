@@ -1,6 +1,7 @@
 """A system with one predominant mass: Hamilton's elements and energies, in numbers.
 
-Hamilton 1835 §31–§39 (notes ``hamilton1835.md`` §7–§8). A central mass M and bodies mᵢ:
+Hamilton 1835 §31–§39 (Second Essay; docs/hamilton.md, "The system with one predominant mass"). A
+central mass M and bodies mᵢ:
 
 * ξᵢ — the position of mᵢ relative to M ("heliocentric");
 * x′ᵢ — the velocity of mᵢ relative to the centre of gravity ("centrobaric");
@@ -168,7 +169,7 @@ def hamilton_elements(
 
     The classical elements of the Kepler orbit of (ξ, (1 + m/M) x′) with parameter
     K = G(M + m) give ω and ℓ; then μ, λ, χ, ν by Hamilton's direct formulas,
-    ϖ = ν + ω and τ = t − ℓ/n (notes §8.3, "the reverse conversion").
+    ϖ = ν + ω and τ = t − ℓ/n (the reverse of (Q2.), (186.), (V2.)).
 
     Parameters
     ----------

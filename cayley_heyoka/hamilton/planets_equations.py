@@ -1,7 +1,7 @@
 """A system with one predominant mass as heyoka expressions: (F2.) and Hamilton's elements.
 
-Symbols and the two formulations (notes ``hamilton1835.md`` §7–§8; the numbers and the table
-of elements are in :mod:`.planets`):
+Symbols and the two formulations (Hamilton 1835, Second Essay §31–39; docs/hamilton.md; the numbers
+and the table of elements are in :mod:`.planets`):
 
 * **canonical** — the state is (ξᵢ, pᵢ = mᵢx′ᵢ) and the equations are the canonical equations
   of H (F2.), taken by heyoka (:func:`canonical_system`);

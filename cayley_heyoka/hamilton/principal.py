@@ -1,7 +1,7 @@
 """Checking Hamilton's principal function on a run, through the variational equations.
 
 S(η, e, t) = ∫₀ᵗ (T + U) dt is a function of the final coordinates η, the initial coordinates e
-and the time (notes ``hamilton1835.md`` §1.2). Its partial derivatives satisfy
+and the time (Hamilton 1835, Second Essay, (19.)–(23.)). Its partial derivatives satisfy
 
     ∂S/∂η = ϖ,        ∂S/∂e = −p,        ∂S/∂t = −H.
 

@@ -1,6 +1,7 @@
 """Hamilton's projectile (Second Essay, 1835, §24–27) in closed form, at any precision.
 
-Symbols, as in ``shared/notes/hamilton1835.md`` §0 and §5:
+Symbols, as in Hamilton (1835), *Second Essay on a General Method in Dynamics*, §24–27
+(docs/hamilton.md, "The projectile in closed form"):
 
 * ``η = (η₁, η₂, η₃)`` — rectangular coordinates of the point, η₃ vertical (upwards);
   ``ϖ = (ϖ₁, ϖ₂, ϖ₃)`` — the conjugate momenta (velocities, unit mass).

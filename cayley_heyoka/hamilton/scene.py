@@ -1,14 +1,14 @@
 """The Hamiltonian tables of a scene: ``[hamiltonian]`` and ``[initial]``.
 
 ``[hamiltonian]``
-    ``model = "projectile"`` with ``g``, ``mu``, ``nu`` (Hamilton's example, §5 of the notes:
+    ``model = "projectile"`` with ``g``, ``mu``, ``nu`` (Hamilton's example, Second Essay §24–27:
     H = ½|ϖ|² + g η₃ + ½{μ²(η₁² + η₂²) + ν² η₃²}), or ``H = "..."``: any Hamiltonian as text
     over ``eta1 … etaN``, ``varpi1 … varpiN`` and ``t``, or a split ``H1``, ``H2`` with the
     motion of H₁ in ``[hamiltonian.flow]``. ``formulation = "elements"`` integrates Hamilton's
     varying elements of the split instead of η, ϖ.
     ``model = "predominant_mass"`` with ``G``, ``central_mass`` and ``[[hamiltonian.bodies]]``
     (each a ``mass`` and either ``elements`` or ``position`` and ``velocity``): Hamilton's
-    system with one predominant mass (§7–§8 of the notes; :mod:`.planets`), integrated in
+    system with one predominant mass (Second Essay §31–39; :mod:`.planets`), integrated in
     canonical heliocentric coordinates or through Hamilton's elements of every body.
 ``[initial]``
     ``eta`` and ``varpi``: the coordinates and momenta at the start time (N each; N = 3 for

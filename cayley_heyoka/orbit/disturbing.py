@@ -1,11 +1,11 @@
 """Disturbing functions Ω of the fixed frame's Cartesian coordinates, and the scene tables.
 
-Ω is Cayley's disturbing function (notes §6.1): the force function is ``V = μ/r + Ω`` and the
-perturbing acceleration is ``+∇Ω`` (the sign of most modern texts, minus Laplace's R). Each
-term below is written as a heyoka expression of the position ``x`` in frame 0 and of time; its
-gradient is taken by heyoka's symbolic differentiation (:func:`gradient`), and Cayley's partial
-derivatives follow from it by the chain rule through the frame tables (:mod:`.equations`).
-
+Ω is Cayley's disturbing function (Cayley 1860; docs/orbits.md): the force function is
+``V = μ/r + Ω`` and the perturbing acceleration is ``+∇Ω`` (the sign of most modern texts, minus
+Laplace's R). Each term below is written as a heyoka expression of the position ``x`` in frame 0
+and of time; its gradient is taken by heyoka's symbolic differentiation (:func:`gradient`), and
+Cayley's partial derivatives follow from it by the chain rule through the frame tables
+(:mod:`.equations`).
 Only the terms a scene names are built, and their numbers are runtime parameters, so two
 scenes differing only in numbers share one compiled integrator.
 

@@ -4,14 +4,16 @@ A body moves about a central mass with gravitational parameter ``μ`` (``mu``). 
 orbit — the Kepler orbit through its inertial position and velocity — is described here by
 
 1. **Cartesian** position ``x`` and velocity ``v`` in the fixed frame 0;
-2. **Cayley's state** ``(r, ṙ, ρ, h, Θ, Σ, Φ)`` (``../shared/notes/cayley1860.md`` §2, §5, §9.2):
-   radius ``r`` and radial velocity ``ṙ``; departure ``ρ`` of the body (angle in the orbit plane
-   from the departure point ``x₂``); angular momentum per unit mass ``h = r²ρ̇ = |x × v|``; node
+2. **Cayley's state** ``(r, ṙ, ρ, h, Θ, Σ, Φ)`` (Cayley 1860, "A supplementary memoir on the
+   problem of disturbed elliptic motion"; docs/orbits.md, "Conventions"): radius ``r`` and
+   radial velocity ``ṙ``; departure ``ρ`` of the body (angle in the orbit plane from the
+   departure point ``x₂``); angular momentum per unit mass ``h = r²ρ̇ = |x × v|``; node
    longitude ``Θ``, node departure ``Σ`` and inclination ``Φ`` of the orbit plane (frame 2)
    relative to the reference plane (frame 1). ``u = ρ − Σ`` is the argument of latitude;
-3. **classical elements** ``(a, e, i, Ω, ω, M)`` referred to frame 1 (notes §9.1): semi-major
-   axis, eccentricity, inclination ``i = Φ``, longitude of the ascending node ``Ω = Θ``, argument
-   of pericentre ``ω`` (with ``u = ω + f``, ``f`` the true anomaly) and mean anomaly ``M``.
+3. **classical elements** ``(a, e, i, Ω, ω, M)`` referred to frame 1 (docs/orbits.md,
+   "Converting states"): semi-major axis, eccentricity, inclination ``i = Φ``, longitude of the
+   ascending node ``Ω = Θ``, argument of pericentre ``ω`` (with ``u = ω + f``, ``f`` the true
+   anomaly) and mean anomaly ``M``.
 
 Frame 1 is placed in frame 0 by ``frame = (θ′, σ′, φ′)`` — node longitude, node departure and
 inclination, in that order, as in :func:`~cayley_heyoka.orbit.frames.plane_matrix` — evaluated at
@@ -86,7 +88,7 @@ FIXED_FRAME = (0, 0, 0)
 
 @dataclass(frozen=True)
 class CayleyState:
-    """Cayley's osculating-plane variables (notes §2, §5), frame 2 relative to frame 1.
+    """Cayley's osculating-plane variables (Cayley 1860), frame 2 relative to frame 1.
 
     Attributes
     ----------
@@ -303,7 +305,7 @@ def cartesian_to_cayley(
     sigma: Any = 0,
     frame: Sequence[Any] = FIXED_FRAME,
 ) -> CayleyState:
-    """Cayley's state at the epoch from the Cartesian state (notes §9.2, steps 1–6).
+    """Cayley's state at the epoch from the Cartesian state (docs/orbits.md, "Converting states").
 
     Parameters
     ----------
@@ -351,7 +353,7 @@ def cartesian_to_cayley(
 def cayley_to_cartesian(
     state: CayleyState, frame: Sequence[Any] = FIXED_FRAME
 ) -> tuple[Vector, Vector]:
-    """Position and velocity in frame 0 from Cayley's state (notes §5).
+    """Position and velocity in frame 0 from Cayley's state (docs/orbits.md, "Conventions").
 
     ``x = r M₀₁ M₁₂ (cos ρ, sin ρ, 0)ᵀ = r x̂₃`` and ``v = ṙ x̂₃ + (h/r) ŷ₃``, with ``x̂₃, ŷ₃`` of
     §5 (argument of latitude ``u = ρ − Σ``) carried to frame 0 by ``M₀₁(θ′, σ′, φ′)``.
@@ -384,7 +386,8 @@ def cayley_to_cartesian(
 
 
 def cayley_to_elements(state: CayleyState, mu: Any) -> Elements:
-    """Classical elements of the osculating ellipse from Cayley's state (notes §9.1).
+    """Classical elements of the osculating ellipse from Cayley's state (docs/orbits.md,
+    "Converting states").
 
     ``1/a = 2/r − (ṙ² + h²/r²)/μ``; ``e cos E = 1 − r/a``, ``e sin E = rṙ/√(μa)``;
     ``tan(f/2) = √((1 + e)/(1 − e)) tan(E/2)``, ``M = E − e sin E``; ``i = Φ``, ``Ω = Θ``,
@@ -440,7 +443,8 @@ def cayley_to_elements(state: CayleyState, mu: Any) -> Elements:
 
 
 def elements_to_cayley(elements: Elements, mu: Any, sigma: Any = 0) -> CayleyState:
-    """Cayley's state from classical elements, with the gauge ``Σ = sigma`` (notes §9.1).
+    """Cayley's state from classical elements, with the gauge ``Σ = sigma`` (docs/orbits.md,
+    "Converting states").
 
     ``E`` from Kepler's equation, ``tan(f/2) = √((1 + e)/(1 − e)) tan(E/2)``,
     ``r = a(1 − e cos E)``, ``ṙ = √(μa) e sin E / r``, ``h = √(μp)`` with ``p = a(1 − e²)``;

@@ -1,6 +1,6 @@
 """Cayley's 1860 equations of disturbed motion in the osculating orbit plane.
 
-Symbols (notes ``cayley1860.md``; frames in :mod:`.frames`): r the radius, ṙ its rate, ρ the
+Symbols (Cayley 1860; docs/orbits.md; frames in :mod:`.frames`): r the radius, ṙ its rate, ρ the
 departure of the body (angle in the orbit plane from the departure point x₂), h = r²ρ̇ the
 angular momentum per unit mass, Θ, Σ, Φ the node longitude, node departure and inclination of
 the orbit plane on the reference plane, u = ρ − Σ the argument of latitude. The reference

@@ -1,6 +1,7 @@
 """The frames of Cayley (1860) and the tables that place one in another.
 
-Symbols, as in the memoir (``../shared/notes/cayley1860.md`` §2–§4):
+Symbols, as in the memoir (Cayley 1860, "A supplementary memoir on the problem of disturbed
+elliptic motion"; docs/orbits.md, "Symbols"):
 
 * frame 0 — the fixed (inertial) reference plane;
 * frame 1 — the reference plane, possibly moving: node longitude θ′, node departure σ′ and
@@ -64,7 +65,8 @@ def rotation_z(a: Any) -> Matrix:
 
 
 def plane_matrix(theta: Any, sigma: Any, phi: Any) -> Matrix:
-    """``M(θ, σ, φ) = R₃(θ) R₁(φ) R₃(−σ)``, written out (notes §3.2).
+    """``M(θ, σ, φ) = R₃(θ) R₁(φ) R₃(−σ)``, written out (Lamé's table; docs/orbits.md,
+    "Conventions").
 
     Column 3 is the plane's normal, ``(sin θ sin φ, −cos θ sin φ, cos φ)``.
     """

@@ -273,7 +273,8 @@ class _Builder:
         self.system = list(zip([r, rdot, rho, h, *q], rhs, strict=True))
         self.initial = start
         self._kinematics(r, rdot, h, axes)
-        # Θ, Σ, Φ read off M₁₂ = M₀₁ᵀ ℛ(q) (notes §10), for output only.
+        # Θ, Σ, Φ read off M₁₂ = M₀₁ᵀ ℛ(q) (docs/orbits.md, "The quaternion formulation"), for
+        # output only.
         M02 = eq.quaternion_matrix(q)
         M12 = (
             M02 if self.plane is None else frames.matmul(frames.transpose(self.plane.matrix()), M02)
@@ -394,7 +395,8 @@ def _plane_matrix_at(motion: PlaneMotion | None, t: Any) -> frames.Matrix:
 
 
 def _plane_quaternion(frame: tuple, angles: tuple) -> list:
-    """q of M₀₂ = M(θ′, σ′, φ′) M(Θ, Σ, Φ) as a product of axis quaternions (notes §10)."""
+    """q of M₀₂ = M(θ′, σ′, φ′) M(Θ, Σ, Φ) as a product of axis quaternions
+    (docs/orbits.md, "The quaternion formulation")."""
 
     def axis(k: int, a: Any) -> list:
         q = [mpmath.cos(a / 2), mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)]

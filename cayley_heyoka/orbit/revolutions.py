@@ -1,9 +1,9 @@
 """Keeping the departure ρ small: whole revolutions are moved out of the integrated state.
 
-ρ grows by about 2π per orbit. Integrated as it is, it would lose absolute accuracy like its
-own ulp (after 1000 orbits ρ ≈ 6000 carries ~1e-12 per rounding, against ~1e-15 for the other
-variables), and heyoka's error control, which scales the tolerance by the largest state
-component, would loosen the step for every variable by the same factor (notes §10, practical
+ρ grows by about 2π per orbit. Integrated as it is, it would lose absolute accuracy like its own ulp
+(after 1000 orbits ρ ≈ 6000 carries ~1e-12 per rounding, against ~1e-15 for the other variables),
+and heyoka's error control, which scales the tolerance by the largest state component, would loosen
+the step for every variable by the same factor (docs/orbits.md, "Near-equatorial orbits", practical
 note).
 
 So the integrator carries ``ρ_s = ρ − k C``, where ``C`` is 2π rounded to the run's precision

@@ -7,8 +7,8 @@ difference bounds the error of the first and, with room to spare, that of the se
 returned. A call whose estimate exceeds the requested ``10**-dps`` raises
 :class:`PrecisionNotReached` instead of returning a silently wrong number.
 
-Errors are *scaled*: absolute for |value| ≤ 1, relative above, the convention of the reference
-value notes in ``shared/notes``.
+Errors are *scaled*: absolute for |value| ≤ 1, relative above, the convention of the 25-digit
+test values in tests/reference/test_closed_form.py.
 """
 
 from __future__ import annotations

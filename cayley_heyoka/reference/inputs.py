@@ -29,7 +29,8 @@ def read_inertia(values: object, require_physical: bool = True) -> list[mpmath.m
     """Principal moments: three finite numbers > 0 obeying the triangle inequality.
 
     ``require_physical=False`` waives the triangle inequality: no rigid body violates it, but
-    Euler's equations stay well posed (the reference notes' separatrix cases use 1, 2, 4).
+    Euler's equations stay well posed (the separatrix cases of tests/reference/test_closed_form.py
+    use 1, 2, 4).
     """
     A, B, C = read_triple(values, "inertia")
     if min(A, B, C) <= 0:

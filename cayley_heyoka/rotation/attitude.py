@@ -1,6 +1,7 @@
 """Attitude representations and Cayley's composition of rotations (Cayley 1843, §1–§2).
 
-Symbols, as in the memoir (``../shared/notes/cayley1843.md``):
+Symbols, as in the memoir (Cayley 1843, "On the motion of rotation of a solid body";
+docs/scenes.md, "Conventions"):
 
 * ``R`` — the direction-cosine matrix, ``R[i][j] = cos(space axis i, body axis j)``: row = space,
   column = body, ``v_space = R v_body``. Cayley names its entries α β γ / α′ β′ γ′ / α″ β″ γ″.

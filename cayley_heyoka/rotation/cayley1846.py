@@ -1,7 +1,7 @@
 """Cayley's 1846 solution of the free rigid body in Rodrigues' parameters, in mpmath.
 
-Restated in ``../shared/notes/cayley1846.md`` (§§3–8); additive constants as in
-``rotation_alt_reference_values.md``. Symbols of the memoir, used below:
+From Cayley (1846), "On the rotation of a solid body round a fixed point", eqs. (5)–(28); additive
+constants as in docs/reference.md ("Euler 1758 and Cayley 1846"). Symbols of the memoir, used below:
 
 * ``A, B, C`` principal moments, ``p, q, r`` body rates, ``L_b = (Ap, Bq, Cr)``.
 * ``λ, μ, ν`` — the Cayley–Rodrigues parameters of the attitude, whose matrix (eq. (6)) maps
@@ -54,7 +54,7 @@ _QUATERNION = ("quaternion_w", "quaternion_x", "quaternion_y", "quaternion_z")
 
 @dataclass(frozen=True)
 class Cayley1846State:
-    """Cayley's solution at one time, in the conventions of ``rotation_alt_reference_values.md``.
+    """Cayley's solution at one time, in the conventions of docs/reference.md.
 
     Attributes
     ----------
@@ -165,7 +165,7 @@ class _CayleyConstants:
         return sum((x + y) ** 2 for x, y in zip(self.space_momentum, Lb, strict=True)) / 4
 
     def dangle_dt(self, rates) -> mpmath.mpf:
-        """d[2 tan⁻¹(Ω/k)]/dt = k(h + Φ)/(2υ) (cayley1846.md §7–§8)."""
+        """d[2 tan⁻¹(Ω/k)]/dt = k(h + Φ)/(2υ) (Cayley 1846, eqs. (19)–(28))."""
         Phi = _dot(self.space_momentum, rates)
         return self.k * (self.h + Phi) / (2 * self.upsilon(self.momentum(rates)))
 
@@ -388,14 +388,14 @@ class Cayley1846:
 
         The path is cut at the turning values of υ (V = 0, located as the zeros of dυ/dΘ) and,
         next to the separatrix, at the slow passages where V dips without vanishing
-        (cayley1846.md §8, "How to evaluate them"). Every piece lies in a stretch between two
+        (Cayley 1846, the quadratures (27)–(28)). Every piece lies in a stretch between two
         consecutive turning values υᵢ, υᵢ₊₁ and is integrated in the χ of that stretch,
         υ = υᵢ + (υᵢ₊₁ − υᵢ) sin²χ, which removes the square-root singularities of both turning
         values (also for the end pieces, whose other end is υ(0) or υ(t)). At each node (18) is
         solved on the branch of the stretch: its first two equations hold identically on the
-        polhode as parametrised by Θ (euler1758.md §2.1), and the third,
+        polhode as parametrised by Θ (:mod:`.euler1758`), and the third,
         ``aAp + bBq + cCr = 2υ − k²``, is solved by Newton's method for the Θ-offset from the
-        nearer turning point, the change of υ being computed without cancellation (the note's
+        nearer turning point, the change of υ being computed without cancellation (the
         caution (1)). Whole stretches repeat every period and are integrated once.
 
         Parameters
@@ -446,7 +446,7 @@ def _pieces(k: _CayleyConstants, lo: mpmath.mpf, hi: mpmath.mpf):
     Yields ``(index, τa, τb, x, y)``: the piece [x, y] lies between the consecutive turning
     points τa < τb, and ``index`` identifies τa among the turning points of one period. Next
     to the separatrix a stretch is cut again at the slow passages, where V dips without
-    vanishing (cayley1846.md §8, caution (2)).
+    vanishing (Cayley 1846, the quadratures (27)–(28)).
     """
     two_pi = 2 * mpmath.pi
     turning = k.turning_thetas()

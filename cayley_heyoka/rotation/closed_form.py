@@ -1,6 +1,6 @@
 """The free rigid body in closed form (Cayley 1843, §6–§8), in mpmath at any precision.
 
-Symbols, as in ``../shared/notes/cayley1843.md``:
+Symbols, as in Cayley (1843), "On the motion of rotation of a solid body" (docs/reference.md):
 
 * ``A, B, C`` principal moments; ``p, q, r`` body rates, ``p₁, q₁, r₁`` their values at t = 0;
   ``h = Ap² + Bq² + Cr²`` (twice the energy), ``k = |L|``.
@@ -64,7 +64,7 @@ class Crossing:
 
 @dataclass(frozen=True)
 class FreeBodyState:
-    """The free body at one time, in the conventions of ``cayley1843_reference_values.md``.
+    """The free body at one time, in the conventions of docs/reference.md.
 
     Attributes
     ----------
@@ -811,7 +811,7 @@ def free_rigid_body(
     """The free rigid body at time ``t``: the stable entry point for users and checks.
 
     Returns the state with ``p, q, r, phi, psi, nu0, lambda0, mu0`` (mpmath numbers) in the
-    conventions of ``cayley1843_reference_values.md`` (φ(0) = 0, ν₀(0) = 0, ψ = 2 tan⁻¹ν₀
+    conventions of docs/reference.md (φ(0) = 0, ν₀(0) = 0, ψ = 2 tan⁻¹ν₀
     unwrapped), with error estimates in ``state.errors``; see :class:`FreeRigidBody` for the
     parameters and for repeated evaluations (which reuse the constants).
     """

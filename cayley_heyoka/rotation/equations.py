@@ -1,6 +1,7 @@
 """Euler's equations, the kinematics of the attitude, and torques from a force function.
 
-Symbols (Cayley 1843, ``../shared/notes/cayley1843.md`` §3–§5):
+Symbols (Cayley 1843, "On the motion of rotation of a solid body": the kinematics, the forced
+motion and the integrals of the free motion; docs/scenes.md, "Conventions"):
 
 * ``A, B, C`` — principal moments of inertia; ``p, q, r`` — body-frame angular velocity.
 * ``λ, μ, ν`` — Cayley–Rodrigues parameters, ``κ = 1 + λ² + μ² + ν²``; ``w, x, y, z`` — quaternion.

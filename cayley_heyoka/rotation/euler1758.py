@@ -1,7 +1,8 @@
 """Euler's 1758 solution of the free rigid body relative to a fixed direction P, in mpmath.
 
-Restated in ``../shared/notes/euler1758.md``; additive constants of the angles as in
-``rotation_alt_reference_values.md``. Symbols of the memoir, used below:
+From Euler (1758), "Du mouvement de rotation des corps solides autour d'un axe variable" (reproduced
+by Cayley, 1868); additive constants of the angles as in docs/reference.md. Symbols of the memoir,
+used below:
 
 * ``A, B, C`` principal moments; ``p, q, r`` body rates (Euler's x, y, z).
 * ``L, M, N = (B − C)/A, (C − A)/B, (A − B)/C`` (Euler's A, B, C), so that ``ṗ = Lqr`` etc.
@@ -101,7 +102,7 @@ Integrand = Callable[[mpmath.mpf, mpmath.mpf], mpmath.mpf]
 
 
 class RegularisedRates:
-    """Euler's body rates in the regularised angle Θ (``euler1758.md`` §2.1), at one precision.
+    """Euler's body rates in the regularised angle Θ (u = u_lo + Δ sin²Θ), at one precision.
 
     Build it inside ``mpmath.workdps(d)``; every method must run at that same precision.
 
@@ -225,8 +226,8 @@ class RegularisedRates:
         """∫_a^b integrand: Gauss–Legendre, then tanh-sinh if that did not converge.
 
         Tanh-sinh alone when the motion is next to the separatrix (``sharp``). Raises
-        :class:`PrecisionNotReached` when the estimate exceeds the target (scaled like the notes:
-        absolute up to 1, relative above).
+        :class:`PrecisionNotReached` when the estimate exceeds the target (scaled like the closed
+        forms': absolute up to 1, relative above).
         """
         if a == b:
             return mpmath.mpf(0)
@@ -356,7 +357,7 @@ def theta_at_time(
 # -- Euler's solution ------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class EulerState:
-    """Euler's solution at one time, in the conventions of ``rotation_alt_reference_values.md``.
+    """Euler's solution at one time, in the conventions of docs/reference.md.
 
     Attributes
     ----------
@@ -431,7 +432,7 @@ class _EulerConstants:
         if self.f <= mpmath.mpf("1e-12") * self.root_G:
             raise ValueError(
                 "direction: P is (anti)parallel to the angular momentum to within 1e-12 rad "
-                "(f = √(G − 𝔇²) = 0, euler1758.md §9); U and φ + 𝔉 are undefined"
+                "(f = √(G − 𝔇²) = 0); U and φ + 𝔉 are undefined"
             )
         v0 = sum(w[i] * P[i] for i in range(3))
         R0 = _det(P, Lb, w)

@@ -1,6 +1,7 @@
 """Cayley's 1846 elements of the rotating body, and the equations of their variation.
 
-Restated in ``../shared/notes/cayley1846.md`` (§§1–9). Symbols of the memoir, used below:
+From Cayley (1846), "On the rotation of a solid body round a fixed point", eqs. (1)–(63)
+(docs/rotation_elements.md). Symbols of the memoir, used below:
 
 * ``A, B, C`` principal moments; ``ω = (p, q, r)`` body rates; ``L_b = (Ap, Bq, Cr)``.
 * ``ρ = (λ, μ, ν)`` — the Cayley–Rodrigues parameters of the attitude; ``R(ρ)`` (eq. (6)) maps
