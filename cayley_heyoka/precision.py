@@ -63,15 +63,10 @@ class Precision:
             object.__setattr__(self, "bits", fixed[self.kind])
         elif self.kind == "real":
             bits = self.bits
-            if (
-                isinstance(bits, bool)
-                or not isinstance(bits, int)
-                or not _MIN_BITS <= bits <= MAX_BITS
-            ):
+            if isinstance(bits, bool) or not isinstance(bits, int) or bits < _MIN_BITS:
                 raise SceneError(
                     "integrator.precision.bits",
-                    f"must be an integer >= {_MIN_BITS} and <= {MAX_BITS} for multiprecision, "
-                    f"got {bits!r:.40}",
+                    f"must be an integer >= {_MIN_BITS} for multiprecision, got {bits!r:.40}",
                 )
         else:
             raise SceneError(
@@ -95,6 +90,18 @@ class Precision:
             bits = spec["bits"]
             if isinstance(bits, str) and bits.isascii() and bits.isdigit() and len(bits) < 10:
                 bits = int(bits)
+            # A scene's limit, not the type's: the package itself computes above it (reference
+            # certificates, closed forms with guard bits).
+            if (
+                isinstance(bits, bool)
+                or not isinstance(bits, int)
+                or not _MIN_BITS <= bits <= MAX_BITS
+            ):
+                raise SceneError(
+                    "integrator.precision.bits",
+                    f"must be an integer >= {_MIN_BITS} and <= {MAX_BITS} for multiprecision, "
+                    f"got {bits!r:.40}",
+                )
             return cls("real", bits)
         raise SceneError(
             "integrator.precision", f"must be 'double', 'quad' or {{bits = N}}, got {spec!r}"

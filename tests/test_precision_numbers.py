@@ -112,6 +112,8 @@ def test_precision_bits_beyond_the_documented_limit_are_refused(bits):
 def test_the_largest_precision_is_accepted():
     scene = Scene.from_dict(free_body(1, 1, 1, precision={"bits": MAX_BITS}))
     assert scene.integrator.precision.bits == MAX_BITS
+    # The limit is the scene's: the package computes above it (guard bits of closed forms).
+    assert Precision("real", 4 * MAX_BITS).bits == 4 * MAX_BITS
 
 
 # π to 40 digits is below π; the double math.pi is below both, so `<= math.pi` refused it.
