@@ -93,7 +93,7 @@ def test_projectile_reference_matches_the_notes_and_reproduces_from_its_metadata
     out = generate_reference(sc, 30, tmp_path / "a.h5", command=["test"])
     assert out.certified
     ref = ch.load_result(tmp_path / "a.h5")
-    # hamilton1835_reference_values.md, case R1 at t = 2.5 (20 digits there).
+    # Case R1 at t = 2.5 of tests/hamilton/test_projectile.py (20 digits there).
     want = ("1.7368282138292105663", "0.38896321247380581221", "2.0483420256785479340")
     with mpmath.workdps(40):
         for i, w in enumerate(want):

@@ -695,7 +695,7 @@ def planets(quick: bool) -> Case:
     n = len(masses)
     case = Case(
         "planets",
-        f"examples/planets.toml (the notes' N5: M = 1, G = 1, masses {masses}, a = {axes}), "
+        f"examples/planets.toml ('N5': M = 1, G = 1, masses {masses}, a = {axes}), "
         f"t = {t_end:.6g} ({orbits} inner orbits)",
         "max over bodies of |Δξᵢ|/aᵢ (heliocentric positions) at the final time",
         f"our canonical formulation in real128 at tolerance {REFERENCE_TOL}",

@@ -238,7 +238,7 @@ def _orbit_scene(formulation: str) -> ch.Scene:
 
 
 def _j2_gradient(x):
-    """∇Ω of J2 about z in closed form (notes cayley1860.md §6.1)."""
+    """∇Ω of J2 about z in closed form (Cayley 1860)."""
     mu, J2, R = _J2["mu"], _J2["J2"], _J2["R"]
     r2 = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
     c = 1.5 * mu * J2 * R**2 * r2**-2.5
@@ -264,9 +264,9 @@ def _hand_written_cartesian_j2(state, parameters: bool = False):
 
 
 def _cayley_j2_system(recipe: bool):
-    """Cayley's system (notes §6.3 with the reduced plane equations of §6.4) for J2 about z.
+    """Cayley's system (docs/orbits.md, with the reduced plane equations) for J2 about z.
 
-    ``recipe``: the notes' step-by-step recipe (§6.4: the orbit axes, x = r x̂₃, the closed-form
+    ``recipe``: a step-by-step recipe ( the orbit axes, x = r x̂₃, the closed-form
     ∇Ω, partials by scalar products) — the same equations as ours, written by hand. Otherwise
     simplified by hand for this Ω alone (s = r sin Φ sin u): what a person specialising the
     equations to J2 would write.
@@ -319,7 +319,7 @@ def orbit_step_cost_table(repeats: int = 7) -> list[str]:
             1,
         ),
         (
-            "Cayley, J2, vs the notes' recipe (same equations)",
+            "Cayley, J2, vs a hand-written recipe (same equations)",
             "cayley",
             lambda s: hy.taylor_adaptive(_cayley_j2_system(True), s),
             4.5,
@@ -419,7 +419,7 @@ def main() -> None:
         "the frame tables (docs/orbits.md); the hand-written systems use the closed-form ∇Ω of "
         "J2 instead, with literal constants that heyoka folds unless said otherwise: our "
         "constants are runtime parameters, so that scenes differing only in numbers share "
-        "compiled code. The notes' recipe is the same equations written by hand; the last row "
+        "compiled code. The recipe is the same equations written by hand; the last row "
         "is the price of generality against algebra specialised to J2 alone.",
         "",
         *orbit_step_cost_table(),

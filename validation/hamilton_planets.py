@@ -1,6 +1,7 @@
 """Hamilton's system with one predominant mass: the two formulations over long runs.
 
-The N5 system of the notes (``hamilton1835.md`` §8.5): M = 1, G = 1, and two bodies,
+The N5 system (Hamilton 1835, Second Essay (S2.), (T2.); examples/planets.toml): M = 1, G = 1,
+and two bodies,
 
     m₁ = 1e-3:  a = 1,   e = 0.05, i = 0.05, Ω = 0.3, ω = 1.1, ℓ₀ = 0.4
     m₂ = 3e-4:  a = 1.8, e = 0.08, i = 0.08, Ω = 2.0, ω = 4.0, ℓ₀ = 2.5

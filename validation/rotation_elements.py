@@ -5,7 +5,7 @@ REPORT.md; ``--no-write`` only prints it)
 
 For each weakly forced scene, :func:`cayley_heyoka.rotation.varying_constants.
 check_element_equations` runs the scene, computes Cayley's elements (a, b, c, h, e, δ) with
-their Jacobian at every recorded state, and compares (notes ``cayley1846.md`` §9):
+their Jacobian at every recorded state, and compares (Cayley 1846, eqs. (29)–(63)):
 
 * pointwise, the elements' actual rates ``∂c/∂t + J ẋ`` with the right-hand sides of (62),
   and ``dk/dt`` with (63);
@@ -17,7 +17,7 @@ Each comparison is judged against the round-off law stated in that function's do
 fixed before any run; the tables give the measured agreement relative to the size of each rate
 (or change), and the worst ratio of error to bound. A second table checks e and δ of free
 states against the mpmath closed form (:class:`~cayley_heyoka.rotation.cayley1846.Cayley1846`)
-on the reference motions R1, R2, R4, R5 of ``rotation_alt_reference_values.md``.
+on the reference motions R1, R2, R4, R5 of tests/rotation/test_euler1758.py.
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ CASES = [
     ("gravity gradient, GM/d³ = 1e-3", GRAVITY, "quaternion", "quad", "6", None),
 ]
 
-# Free reference motions (inertia, rates, rodrigues) of rotation_alt_reference_values.md.
+# Free reference motions (inertia, rates, rodrigues) of tests/rotation/test_euler1758.py.
 FREE = {
     "R1": (("1", "2", "3"), ("0.25", "-0.15", "1.2"), ("0.1", "0.2", "-0.3")),
     "R2": (("1", "2", "3"), ("1.5", "0.2", "-0.25"), ("-0.3", "0.4", "0.5")),

@@ -11,7 +11,7 @@ Symbols, as in Hamilton (1835), *Second Essay on a General Method in Dynamics*, 
 
   ``H = ½|ϖ|² + gη₃ + ½{μ²(η₁² + η₂²) + ν²η₃²}``,  ``U = −gη₃ − ½{μ²(η₁² + η₂²) + ν²η₃²}``,
 
-  ``η̇ = ϖ``, ``ϖ̇₁,₂ = −μ²η₁,₂``, ``ϖ̇₃ = −g − ν²η₃`` (the reference-values note's convention).
+  ``η̇ = ϖ``, ``ϖ̇₁,₂ = −μ²η₁,₂``, ``ϖ̇₃ = −g − ν²η₃`` (Hamilton's (110.)–(112.)).
 * ``S = ∫₀ᵗ (T + U) dt`` — Hamilton's principal function, taken along the motion; as a function
   of the end points ``S(η, e, t)`` it is (120.), with ∂S/∂η = ϖ, ∂S/∂e = −p, ∂S/∂t = −H.
 

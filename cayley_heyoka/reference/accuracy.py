@@ -79,7 +79,7 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
 
 
 def scaled_difference(a: mpmath.mpf, b: mpmath.mpf) -> mpmath.mpf:
-    """|a − b|, relative to |b| when |b| > 1 (the notes' convention)."""
+    """|a − b|, relative to |b| when |b| > 1 (the convention of the test values)."""
     if a == b:  # also for infinite values (a steady rotation's period)
         return mpmath.mpf(0)
     return abs(a - b) / max(mpmath.mpf(1), abs(b))

@@ -1,7 +1,7 @@
 """Hamiltonian scenes: canonical equations from H, the principal function S, bad input.
 
-Reference values: ``../shared/notes/hamilton1835_reference_values.md`` (Hamilton's projectile,
-closed form at 40 digits, printed to 20), copied here so the tests run from a clean clone.
+Reference values: Hamilton's projectile (Second Essay, 1835, §24–27), closed form at 40 digits
+printed to 20, as in tests/hamilton/test_projectile.py.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Hamilton's system with one predominant mass (notes ``hamilton1835.md`` §7–§8).
+"""Hamilton's system with one predominant mass (Hamilton 1835, Second Essay §31–39).
 
 The N5 system throughout: M = 1, G = 1 and two bodies whose relative orbits (Hamilton's
 meaning: Kepler orbits of ξ with parameter G(M + m)) have, at the start time,
@@ -36,7 +36,7 @@ from cayley_heyoka.orbit.elements import Elements
 EPS = 2.0**-52
 EPS_QUAD = 2.0**-112
 TWO_PI = "6.283185307179586476925286766559005768394"
-# Check N5 of the notes: the bodies of the bundled example (their numbers live there only).
+# "N5": the two bodies of the bundled example (their numbers live there only).
 _N5 = load_scene(Path(__file__).resolve().parents[2] / "examples" / "planets.toml").to_dict()
 MASSES = tuple(body["mass"] for body in _N5["hamiltonian"]["bodies"])
 ELEMENTS = tuple(body["elements"] for body in _N5["hamiltonian"]["bodies"])
@@ -123,9 +123,9 @@ def test_canonical_equations_follow_a_barycentric_nbody_integration():
 
 @pytest.mark.parametrize("body", [0, 1])
 def test_brackets_of_hamiltons_elements_are_the_unit_ones(body):
-    """§8.4 in Lagrange's form: with ξ(z, t) and x′(z, t) of :func:`state_from_elements`,
+    """(188.)–(210.) in Lagrange's form: with ξ(z, t) and x′(z, t) of :func:`state_from_elements`,
     [a, b] = Σ (∂ξ/∂a ∂x′/∂b − ∂ξ/∂b ∂x′/∂a) is 1 for (μ, τ), (ϖ, λ), (χ, ν) and 0 otherwise,
-    at the epochs of the notes (N2): the inverse transpose of Hamilton's unit Poisson
+    at the epochs of the test (N2): the inverse transpose of Hamilton's unit Poisson
     brackets. Symbolic derivatives in double: each bracket sums products of two partials, which
     grow with t − τ (∂ℓ/∂μ does) and carry 1/e (e = √(1 − b²): ∂e/∂μ = −∂(b²)/∂μ / 2e), and
     cancel to 0 or 1; the bound is 64 ε (1 + |t − τ|)²/e²."""

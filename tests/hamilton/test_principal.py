@@ -72,7 +72,7 @@ def test_a_wrong_principal_function_is_caught(monkeypatch):
 
 
 def test_principal_function_of_relative_motion():
-    """Check N7 of the notes: δS = Σ m(x′·δξ − a′·δa) for two planets about a predominant
+    """Check N7: δS = Σ m(x′·δξ − a′·δa) for two planets about a predominant
     mass, in (F2.)'s canonical heliocentric coordinates (whose outputs use parameters the
     equations do not)."""
     elements = {"e": "0.05", "inclination": "0.05", "node": "0.3"}

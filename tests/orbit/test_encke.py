@@ -119,7 +119,7 @@ def test_energy_is_monitored():
 
 
 def test_reference_values_double():
-    """R1–R4 at their times, against the notes' 20-digit values, within the phase law."""
+    """R1–R4 at their times, against their 20-digit values, within the phase law."""
     for name, case in CASES.items():
         res = run(Scene.from_dict(case_scene(name, "encke", ["0", case.t])))
         steps = res.counters["steps"]
@@ -141,7 +141,7 @@ def quad_r1() -> dict:
 
 def test_quad_agrees_with_cartesian_quad(quad_r1):
     """The rectification runs in mpmath with 64 guard bits: the two real128 runs agree to the
-    phase law in real128's ε (~1e-30 here), and match the notes' 20 digits."""
+    phase law in real128's ε (~1e-30 here), and match the values' 20 digits."""
     enc, cart = quad_r1["encke"], quad_r1["cartesian"]
     bound = 4 * 3 * math.pi * orbits("R1", 50.0) * EPS_QUAD * math.sqrt(cart.counters["steps"])
     with mpmath.workdps(40):

@@ -1,8 +1,8 @@
 """Cayley's equations as built by the model, against independent statements of them.
 
-* the *literal* form of notes §6.3: Ω composed with the frame tables into a function of
-  (r, ρ, Θ, Σ, Φ, t) and differentiated symbolically in those variables — not through the
-  Cartesian gradient and the chain rule the model uses;
+* the *literal* form of Cayley's system (docs/orbits.md): Ω composed with the frame tables into a
+  function of (r, ρ, Θ, Σ, Φ, t) and differentiated symbolically in those variables — not through
+  the Cartesian gradient and the chain rule the model uses;
 * the quaternion form and the Cartesian form: the same physical acceleration.
 """
 

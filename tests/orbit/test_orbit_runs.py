@@ -43,9 +43,9 @@ POSITION, VELOCITY = ("x", "y", "z"), ("vx", "vy", "vz")
 SLOW = ("h", "Theta", "Sigma", "Phi")
 
 # --------------------------------------------------------------------- the reference cases
-# R1–R4 of cayley1860_reference_values.md, shared with the validation report
+# The orbit test cases R1–R4, shared with the validation report
 # (validation/orbit_cases.py): inputs, and the state at time t to 20 significant digits. The
-# notes' third body x₃ = a₃R₃(Ω₃)R₁(i₃)(cos λ₃, sin λ₃, 0), λ₃ = n₃t + λ₃,₀, is a circular orbit
+# cases' third body x₃ = a₃R₃(Ω₃)R₁(i₃)(cos λ₃, sin λ₃, 0), λ₃ = n₃t + λ₃,₀, is a circular orbit
 # with node = Ω₃, inclination = i₃, argument_of_pericentre = 0 and mean_anomaly0 = λ₃,₀.
 CASES = {c.name: c.scene for c in orbit_cases.REFERENCE}
 REFERENCE = {c.name: (c.t, c.values) for c in orbit_cases.REFERENCE}
@@ -145,7 +145,7 @@ def quad_r1() -> dict:
 
 @pytest.mark.parametrize("formulation", ["cayley", "cartesian"])
 def test_reference_values_quad(quad_r1, formulation):
-    """In real128 the run is good to ~1e-28 (notes); the 20 printed digits limit the check to
+    """In real128 the run is good to ~1e-28; the 20 printed digits limit the check to
     their own resolution, ≤ 5e-20 relative for every value of R1."""
     res = quad_r1[formulation]
     assert str(res.t[-1]) == str(res.precision.number("50"))
@@ -322,7 +322,7 @@ def test_apsis_events_are_where_rdot_vanishes(r4_events):
     bound = 2 * phase_scale("R4", 40.0, res.counters["steps"])
     rdot = np.sum(x * v, axis=0) / r
     assert np.max(np.abs(rdot) / speed) < bound, (np.max(np.abs(rdot) / speed), bound)
-    a = 1.57569  # osculating a of R4 (notes); e = 0.57, so r is 0.68 or 2.47 at the apses
+    a = 1.57569  # osculating a of R4; e = 0.57, so r is 0.68 or 2.47 at the apses
     assert np.all(r[apses.label == "pericentre"] < 0.8 * a)
     assert np.all(r[apses.label == "apocentre"] > 1.2 * a)
     # ṙ of each run is off by ≲ bound·|v|; its zero moves by that over |r̈| = |h²/r³ − μ/r²|

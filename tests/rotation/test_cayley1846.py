@@ -1,4 +1,4 @@
-"""Cayley's 1846 solution against ``rotation_alt_reference_values.md``, and against Euler's."""
+"""Cayley's 1846 solution against 25-digit test values (below), and against Euler's."""
 
 from __future__ import annotations
 

