@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from importlib import import_module
 from pathlib import Path
 from typing import Any
@@ -12,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from .checks import check_scene, parse_settings
-from .engine import run
-from .errors import IntegrationError, SceneError
+from .engine import run, signals_end_compilation
+from .errors import IntegrationError, Interrupted, SceneError
 from .files import OutputError, ResultFileError, check_destination, identify
 from .result import Result
 from .scene import load_scene
@@ -37,9 +41,13 @@ def main(argv: list[str] | None = None) -> int:
     out, err = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = SafeStream(out), SafeStream(err, allow_cr=True)
     try:
-        code = _main(argv)
+        with _interruptible():
+            code = _main(argv)
         out.flush()  # a closed pipe shows here, not in the interpreter's exit
         return code
+    except KeyboardInterrupt:  # before anything was computed, or in a command that keeps nothing
+        print("interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:
         # Nothing more can be printed; point stdout at /dev/null so that the interpreter's
         # final flush does not complain either.
@@ -47,6 +55,21 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     finally:
         sys.stdout, sys.stderr = out, err
+
+
+@contextlib.contextmanager
+def _interruptible() -> Iterator[None]:
+    """SIGTERM ends a command as Ctrl-C does (results kept, exit 130), and either ends the
+    process at once while LLVM compiles (:func:`~cayley_heyoka.engine.signals_end_compilation`)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGTERM, signal.default_int_handler)
+    try:
+        with signals_end_compilation():
+            yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 def _silence(stream: object) -> None:
@@ -89,6 +112,7 @@ def _main(argv: list[str] | None) -> int:
     )
     p_check.add_argument("scene", type=Path, help="scene TOML file")
     p_check.add_argument("--out", type=Path, help="write the check's rows and series to HDF5")
+    p_check.add_argument("--overwrite", action="store_true", help=_OVERWRITE_HELP)
     p_check.add_argument(
         "--set",
         action="append",
@@ -96,7 +120,6 @@ def _main(argv: list[str] | None) -> int:
         help="an option of the scene's check, e.g. upsilon0=2.5 or twin=quaternion "
         "(repeatable; docs/scenes.md, 'Consistency checks')",
     )
-    p_check.add_argument("--overwrite", action="store_true", help=_OVERWRITE_HELP)
     # The workflows register their own subcommands (each sets ``handler``); their modules
     # import heyoka, h5py or matplotlib only when the command runs.
     for name in WORKFLOW_COMMANDS:
@@ -183,6 +206,9 @@ def _run(args: argparse.Namespace) -> int:
     try:
         result = run(scene, progress=bar.update_to if bar else None)
         code = 0
+    except Interrupted as exc:
+        result, code = exc.result, 130
+        print(f"\n{exc}", file=sys.stderr)
     except IntegrationError as exc:
         result, code = exc.result, 1
         print(f"error: {exc}", file=sys.stderr)

@@ -3,24 +3,39 @@
 Compiled integrators are cached in memory by the *structure* of the equations (the numbers
 live in runtime parameters), so running a scene again, or a scene differing only in its
 numbers, costs a copy of a template integrator instead of an LLVM compilation.
+
+Before anything is compiled a run is refused (:class:`SceneError`) if it cannot fit or cannot
+mean anything: recorded rows beyond :data:`MAX_RECORD_BYTES`, a ``max_step`` that needs more
+steps than the step budget, a non-finite initial state or parameter, and — once compiled — an
+output or monitor that is not finite at the first output time. A run spends at most
+``integrator.max_steps`` steps, then stops with its results. Propagation goes in chunks of
+whole steps, so Ctrl-C (or a SIGTERM the caller turns into one) ends it at a step's end with
+everything recorded so far (:class:`Interrupted`), and with the same bits as an uninterrupted
+run up to there.
 """
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import hashlib
+import math
+import signal
+import threading
 import time
-from collections.abc import Callable
+import warnings
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import heyoka as hy
 import numpy as np
 
-from .errors import IntegrationError
+from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Model
-from .precision import Precision
+from .precision import Precision, exact_fraction
 from .result import EventLog, Result, versions
 from .scene import IntegratorOptions, Scene
 
@@ -57,6 +72,11 @@ class Compiled:
 
 _CACHE: dict[str, Compiled] = {}
 
+#: Largest estimated memory of a run's recorded rows (output times × (state + parameters +
+#: outputs + monitors) numbers); the results, their evaluation and the saved file need a few
+#: times this again, so a run above it would exhaust an ordinary machine.
+MAX_RECORD_BYTES = 2**30
+
 
 def clear_cache() -> None:
     """Forget every compiled integrator (for measuring compile time)."""
@@ -77,6 +97,58 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
     hit = _CACHE.get(key)
     if hit is not None:
         return hit, True
+    with _signals_end_process(), _quiet_heyoka():
+        compiled = _compile(model, options)
+    _CACHE[key] = compiled
+    return compiled, False
+
+
+@contextlib.contextmanager
+def signals_end_compilation() -> Iterator[None]:
+    """Within this context, SIGINT or SIGTERM during an LLVM compilation ends the process.
+
+    LLVM compiles in C++ without returning to Python, so Python's handlers (Ctrl-C's
+    KeyboardInterrupt) would run only when it is done — after seconds or minutes. Nothing is
+    computed before the compilation, so for a command-line process ending at once loses
+    nothing; the signals get their default disposition while compiling, Python's handlers
+    back afterwards. Only in the main thread.
+    """
+    global _END_ON_SIGNAL
+    _END_ON_SIGNAL += 1
+    try:
+        yield
+    finally:
+        _END_ON_SIGNAL -= 1
+
+
+_END_ON_SIGNAL = 0
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def _signals_end_process() -> Iterator[None]:
+    if not _END_ON_SIGNAL or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {sig: signal.signal(sig, signal.SIG_DFL) for sig in _SIGNALS}
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+@contextlib.contextmanager
+def _quiet_heyoka() -> Iterator[None]:
+    """heyoka's ``[warning]`` log lines off (their cases are reported as errors of ours)."""
+    hy.set_logger_level_error()
+    try:
+        yield
+    finally:
+        hy.set_logger_level_warning()  # heyoka's default
+
+
+def _compile(model: Model, options: IntegratorOptions) -> Compiled:
     t0 = time.perf_counter()
     prec = options.precision
     compact = use_compact_mode(model, options)
@@ -107,9 +179,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
     evaluator = hy.cfunc(
         [e for _, e in outputs], [v for v, _ in model.system], compact_mode=compact, **kw
     )
-    compiled = Compiled(ta, evaluator, time.perf_counter() - t0)
-    _CACHE[key] = compiled
-    return compiled, False
+    return Compiled(ta, evaluator, time.perf_counter() - t0)
 
 
 def run(scene: Scene, progress: Progress | None = None) -> Result:
@@ -125,15 +195,34 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     Returns
     -------
     Result
-        Every output time, or, if the run stops early, an :class:`IntegrationError` is raised
-        whose ``result`` holds what was computed up to the failure.
+        Every output time.
+
+    Raises
+    ------
+    SceneError
+        If the scene cannot be run (see the module docstring).
+    IntegrationError
+        If the run stops early (a non-finite state, a terminal event, the step budget); its
+        ``result`` holds what was computed up to there.
+    Interrupted
+        On Ctrl-C (or another signal raising KeyboardInterrupt) during the propagation; its
+        ``result`` holds what was computed, marked interrupted.
     """
     propagation = Propagation(scene, progress)
-    propagation.advance()
+    try:
+        propagation.advance()
+    except KeyboardInterrupt:
+        if propagation.status != INTERRUPTED:
+            raise
+        raise Interrupted(propagation.message, propagation.result()) from None
     result = propagation.result()
     if result.status != 0:
         raise IntegrationError(result.message, result)
     return result
+
+
+#: :attr:`Result.status` of a run ended by a signal (other early stops are -1).
+INTERRUPTED = -2
 
 
 class Propagation:
@@ -159,19 +248,33 @@ class Propagation:
     def __init__(self, scene: Scene, progress: Progress | None = None, keep: bool = True) -> None:
         self._wall0 = time.perf_counter()
         self.scene = scene
-        self.model = model = FAMILIES[scene.family].build(scene)
         self.precision = prec = scene.integrator.precision
-        self.compiled, self._cached = compile_model(model, scene.integrator)
-        self._ta = ta = copy.deepcopy(self.compiled.integrator)
+        # Overflows while building are not reported by numpy: the checks below name them.
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            self.model = model = FAMILIES[scene.family].build(scene)
+            initial = prec.array(model.initial_state)
+            # The whole parameter vector (outputs may use parameters the equations do not);
+            # the integrator holds its leading part, copied back whenever a handler changes it.
+            self._pars = prec.array(model.pars.values)
+        check_fits(scene, model)
         self.grid = scene.output.time_grid(prec)
+        _require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
+        _require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")
+        self.compiled, self._cached = compile_model(model, scene.integrator)
+        first = evaluate_outputs(
+            self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
+        )
+        for name, value in first.items():
+            kind = "monitors" if name in model.monitors else "outputs"
+            _require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
+        self._ta = ta = copy.deepcopy(self.compiled.integrator)
         ta.time = self.grid[0]
-        ta.state[:] = prec.array(model.initial_state)
-        # The whole parameter vector (outputs may use parameters the equations do not); the
-        # integrator holds its leading part, copied back whenever a handler changes it.
-        self._pars = prec.array(model.pars.values)
+        ta.state[:] = initial
         self._held = len(ta.pars)
         ta.pars[:] = self._pars[: self._held]
-        self._callback = _ProgressCallback(progress) if progress else None
+        self._signals = _DeferredSignals()
+        self._callback = _ProgressCallback(progress, self._signals) if progress else None
         # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
         self._limit = {}
         if scene.integrator.max_step is not None:
@@ -185,6 +288,11 @@ class Propagation:
         #: Output times recorded so far.
         self.done = 0
         self._span, self._since_event = len(self.grid), 0
+        # The unreached points of a call cut short by its chunk of steps (how many of them are
+        # output times): the next call goes on to the same last point, so that chunks end only
+        # at the ends of whole steps and change no bit of the trajectory.
+        self._pending: tuple[np.ndarray, int] | None = None
+        self._chunk = _FIRST_CHUNK
 
     @property
     def time(self) -> Any:
@@ -209,11 +317,27 @@ class Propagation:
         states, pars
             The rows recorded by this call: states, and the whole parameter vector at each.
         """
-        ta, prec, grid, model = self._ta, self.precision, self.grid, self.model
+        grid, model = self.grid, self.model
         if until is None:
             until = grid[-1]
         end = int(np.searchsorted(grid, until, side="right"))
-        states, pars_rows = [], []
+        states: list[np.ndarray] = []
+        pars_rows: list[np.ndarray] = []
+        budget = self.scene.integrator.max_steps
+        try:
+            with self._signals, _quiet_heyoka():
+                self._propagate(until, end, budget, states, pars_rows)
+        finally:
+            width = (len(model.system), len(model.pars))
+            state = np.concatenate(states) if states else np.empty((0, width[0]))
+            pars = np.array(pars_rows) if pars_rows else np.empty((0, width[1]))
+            if self._keep:
+                self._states.append(state)
+                self._pars_rows.append(pars)
+        return state, pars
+
+    def _propagate(self, until: Any, end: int, budget: int, states: list, pars_rows: list) -> None:
+        ta, prec, grid, model = self._ta, self.precision, self.grid, self.model
         # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
         # ends a step there. So after a terminal event the grid is resumed from the current
         # time; propagate_until to the next output would end a step at each output reached
@@ -222,16 +346,39 @@ class Propagation:
         # last stretch between events (the next event usually comes first), doubling while
         # none interrupts it.
         while self.status == 0 and (self.done < end or ta.time < until):
-            i = self.done
-            points = grid[i : min(i + self._span, end)]
-            outputs = len(points)
-            if i + self._span >= end and (outputs == 0 or points[-1] != until):
-                points = _ending_at(prec, points, until)  # a boundary, not an output
+            if self._signals.received:
+                self.status = INTERRUPTED
+                self.message = (
+                    f"interrupted ({self._signals.received}) at t = {ta.time}; results kept "
+                    "up to there"
+                )
+                raise KeyboardInterrupt
+            left = budget - self.counters["steps"]
+            if left <= 0:
+                self.status = -1
+                self.message = (
+                    f"the step budget integrator.max_steps = {budget} was spent at t = "
+                    f"{ta.time}; results kept up to there (raise integrator.max_steps to go on)"
+                )
+                break
+            if self._pending is None:
+                i = self.done
+                points = grid[i : min(i + self._span, end)]
+                outputs = len(points)
+                if i + self._span >= end and (outputs == 0 or points[-1] != until):
+                    points = _ending_at(prec, points, until)  # a boundary, not an output
+            else:
+                points, outputs = self._pending
             resume = ta.time != points[0]
             if resume:
                 points = _starting_at(prec, ta.time, points)
-            res = ta.propagate_grid(points, callback=self._callback, **self._limit)
+            t0 = time.perf_counter()
+            res = ta.propagate_grid(
+                points, callback=self._callback, max_steps=min(self._chunk, left), **self._limit
+            )
+            self._chunk = _next_chunk(self._chunk, time.perf_counter() - t0)
             outcome, out = res[0], res[-1]
+            reached = len(out) - int(resume)
             out = out[int(resume) : int(resume) + outputs]
             self.counters["steps"] += res[3]
             states.append(out)
@@ -240,6 +387,13 @@ class Propagation:
             self.done += len(out)
             self._since_event += len(out)
             code = int(outcome)
+            stopped = outcome == hy.taylor_outcome.step_limit or (
+                outcome == hy.taylor_outcome.cb_stop and self._signals.received
+            )
+            self._pending = None
+            if stopped:
+                self._pending = (points[int(resume) + reached :], outputs - len(out))
+                continue
             if outcome == hy.taylor_outcome.time_limit:
                 self._span = min(2 * self._span, len(grid))
                 continue
@@ -256,13 +410,6 @@ class Propagation:
                 self.message = f"stopped by the progress callback at t = {ta.time}"
             else:
                 self.message = f"stopped at t = {ta.time} with outcome {outcome}"
-        width = (len(model.system), len(model.pars))
-        state = np.concatenate(states) if states else np.empty((0, width[0]))
-        pars = np.array(pars_rows) if pars_rows else np.empty((0, width[1]))
-        if self._keep:
-            self._states.append(state)
-            self._pars_rows.append(pars)
-        return state, pars
 
     def _terminal(self, spec: Any) -> None:
         ta = self._ta
@@ -388,12 +535,91 @@ class _Recorder:
 
 
 class _ProgressCallback:
-    def __init__(self, progress: Progress) -> None:
+    def __init__(self, progress: Progress, signals: _DeferredSignals) -> None:
         self.progress = progress
+        self.signals = signals
 
     def __call__(self, ta: Any) -> bool:
         self.progress(float(ta.time))
-        return True
+        return not self.signals.received
+
+
+class _DeferredSignals:
+    """Within the context, SIGINT and SIGTERM handled by Python are only noted (the run stops
+    at the end of the current chunk, or step when there is a progress callback)."""
+
+    def __init__(self) -> None:
+        self.received = ""
+        self._old: dict[int, Any] = {}
+
+    def _note(self, signum: int, frame: Any) -> None:
+        self.received = signal.Signals(signum).name
+
+    def __enter__(self) -> _DeferredSignals:
+        if threading.current_thread() is threading.main_thread():
+            for sig in _SIGNALS:
+                old = signal.getsignal(sig)
+                if callable(old):  # SIG_DFL and SIG_IGN keep their meaning
+                    self._old[sig] = signal.signal(sig, self._note)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, handler in self._old.items():
+            signal.signal(sig, handler)
+        self._old.clear()
+
+
+#: Steps of the first propagate_grid call; later chunks are scaled to last about
+#: :data:`_CHUNK_SECONDS` each, so that a signal is acted on within a fraction of a second
+#: while a call's fixed cost (its grid) stays small next to its steps.
+_FIRST_CHUNK = 1_000
+_CHUNK_SECONDS = 0.2
+_MAX_CHUNK = 10**8
+
+
+def _next_chunk(chunk: int, seconds: float) -> int:
+    if seconds < _CHUNK_SECONDS / 4:
+        return min(4 * chunk, _MAX_CHUNK)
+    if seconds > 2 * _CHUNK_SECONDS:
+        return max(chunk // 2, 16)
+    return chunk
+
+
+def check_fits(scene: Scene, model: Model) -> None:
+    """Refuse a run whose recorded rows would exceed :data:`MAX_RECORD_BYTES`, or whose
+    ``max_step`` needs more steps than ``integrator.max_steps`` to cover its span."""
+    options, output = scene.integrator, scene.output
+    prec = options.precision
+    width = 1 + len(model.system) + len(model.pars) + len(_flat_outputs(model))
+    # heyoka's MPFR numbers hold their limbs outside the array.
+    size = {"double": 8, "quad": 16}.get(prec.kind) or 32 + 8 * math.ceil(prec.bits / 64)
+    need = output.count * width * size
+    if need > MAX_RECORD_BYTES:
+        raise SceneError(
+            "output.times",
+            f"{output.count} output times of {width} numbers ({prec.name}, {size} bytes each) "
+            f"need ~{need / 2**30:.3g} GiB, more than {MAX_RECORD_BYTES / 2**30:.3g} GiB; "
+            "record fewer times",
+        )
+    if options.max_step is not None:
+        start, stop = output.span()
+        steps = (exact_fraction(stop) - exact_fraction(start)) / exact_fraction(options.max_step)
+        if steps > options.max_steps:
+            raise SceneError(
+                "integrator.max_step",
+                f"{options.max_step} needs at least {float(Fraction(steps)):.3g} steps from "
+                f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
+                f"{options.max_steps}",
+            )
+
+
+def _require_finite(values: np.ndarray, names: list[str], what: str) -> None:
+    bad = np.flatnonzero(~np.isfinite(values))
+    if len(bad):
+        i = int(bad[0])
+        raise SceneError(
+            names[i], f"the {what} is {values[i]} at the start: it must be finite to integrate"
+        )
 
 
 def _direction(d: int) -> Any:

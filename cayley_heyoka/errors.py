@@ -34,3 +34,16 @@ class IntegrationError(RuntimeError):
     def __init__(self, message: str, result: Result) -> None:
         self.result = result
         super().__init__(message)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run ended by Ctrl-C (or SIGTERM turned into one): what was computed is in
+    :attr:`result`, whose status says so.
+
+    A KeyboardInterrupt, not an :class:`IntegrationError`: code that tolerates one failed run
+    among many (a sweep) must still stop on Ctrl-C.
+    """
+
+    def __init__(self, message: str, result: Result) -> None:
+        self.result = result
+        super().__init__(message)
