@@ -102,8 +102,19 @@ def check_destination(path: str | Path, kind: str, *, overwrite: bool = False) -
         of this kind and ``overwrite`` is not set.
     """
     given = Path(path)
+    try:
+        _check_destination(given, kind, overwrite)
+    except OSError as exc:  # a name too long, a loop of links, ...
+        raise OutputError(given, f"cannot be written ({_reason(exc)})") from exc
+
+
+def _check_destination(given: Path, kind: str, overwrite: bool) -> None:
     target = Path(os.path.realpath(given))
     parent = target.parent
+    # The temporary's name is the longest this write needs.
+    longest = len(os.fsencode(f".{target.name}.tmp-{os.getpid()}"))
+    if longest > os.pathconf(parent if parent.is_dir() else "/", "PC_NAME_MAX"):
+        raise OutputError(given, f"the file name is too long ({len(target.name)} characters)")
     if not parent.exists():
         raise OutputError(given, f"directory {parent} does not exist")
     if not parent.is_dir():

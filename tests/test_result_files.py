@@ -231,6 +231,31 @@ def _raise(exc: BaseException) -> None:
     raise exc
 
 
+def test_run_on_a_full_disk_says_so_and_keeps_the_previous_file(
+    tmp_path, capsys, monkeypatch, result
+):
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [1, 0.1, 0.2]\n"
+        "[output]\ntimes = [0, 1]\n"
+    )
+    out = tmp_path / "r.h5"
+    result.save(out)
+    before = out.read_bytes()
+
+    def full_disk(self: Result, f: h5py.File) -> None:
+        f["t"] = np.zeros(1000)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(Result, "fill", full_disk)
+    assert main(["run", str(scene), "--out", str(out), "--no-progress"]) == 1
+    captured = capsys.readouterr()
+    assert "completed" in captured.out  # the summary is still shown
+    assert f"error: {out}: could not be written (No space left on device)" in captured.err
+    assert out.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.h5", "s.toml"]
+
+
 _TEXT = {"text": True, "capture_output": True, "check": True}
 
 

@@ -227,6 +227,7 @@ DESTINATIONS: dict[str, Callable[[Path], Path]] = {
     "dangling symlink into nowhere": lambda d: _link(d / "r.h5", d / "nowhere" / "x.h5"),
     "symlink to a directory": lambda d: _link(d / "r.h5", d),
     "fifo": lambda d: _fifo(d / "r.h5"),
+    "name too long": lambda d: d / ("n" * 250 + ".h5"),
 }
 
 
@@ -308,6 +309,14 @@ def test_symlink_to_our_file_writes_through(hostile, pristine, scene, tmp_path):
     link = _link(tmp_path / "latest.h5", target)
     hostile.run(["run", str(scene), "--out", str(link), "--no-progress"], expect="done")
     assert link.is_symlink() and len(Result.load(target).t) == 3
+
+
+def test_a_loop_of_links_is_replaced_by_the_file(hostile, scene, tmp_path):
+    a, b = tmp_path / "a.h5", tmp_path / "b.h5"
+    a.symlink_to(b)
+    b.symlink_to(a)
+    hostile.run(["run", str(scene), "--out", str(a), "--no-progress"], expect="done")
+    assert Result.load(a).success and b.is_symlink()
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only directories")
