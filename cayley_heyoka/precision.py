@@ -349,6 +349,19 @@ def normalised(values: Iterable[Number], precision: Precision) -> tuple[Number, 
         return tuple(mpmath.nstr(x / norm, precision.dps + 10, strip_zeros=False) for x in v)
 
 
+def unit_length(values: Iterable[Number], tolerance: Fraction) -> tuple[bool, str]:
+    """Whether ``|v|`` is within ``tolerance`` of 1, decided exactly, and ``|v|`` as short text.
+
+    ``float()`` of the squared norm would overflow for components beyond 1e154.
+    """
+    import mpmath
+
+    norm2 = sum(exact_fraction(v) ** 2 for v in values)
+    inside = (1 - tolerance) ** 2 <= norm2 <= (1 + tolerance) ** 2
+    with mpmath.workdps(25):
+        return inside, mpmath.nstr(mpmath.sqrt(mpmath.mpf(norm2.numerator) / norm2.denominator), 17)
+
+
 def fraction_text(value: Fraction, precision: Precision) -> str:
     """Decimal text of a rational, with enough digits to round correctly in ``precision``."""
     import mpmath

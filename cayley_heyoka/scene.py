@@ -24,7 +24,6 @@ rounded to double on the way in), so a quadruple-precision run sees ``0.1`` exac
 from __future__ import annotations
 
 import difflib
-import math
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -35,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
-from .precision import Number, Precision, exact_fraction
+from .precision import Number, Precision, exact_fraction, unit_length
 
 _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
 
@@ -91,9 +90,9 @@ def unit_vector(value: Any, where: str) -> tuple[Number, ...]:
     """A 3-vector of unit length to 1e-12 (a guard against typos, not a rescaling: the model
     normalises it in the run's precision, :func:`cayley_heyoka.precision.normalised`)."""
     v = vector(value, where, 3)
-    norm2 = float(sum(exact_fraction(c) ** 2 for c in v))
-    if abs(math.sqrt(norm2) - 1.0) > 1e-12:
-        raise SceneError(where, f"must be a unit vector, has norm {math.sqrt(norm2):.17g}")
+    unit, norm = unit_length(v, Fraction(1, 10**12))
+    if not unit:
+        raise SceneError(where, f"must be a unit vector, has norm {norm}")
     return v
 
 

@@ -243,3 +243,39 @@ def test_an_integer_beyond_the_limit_is_refused_without_printing_it(value):
         Scene.from_dict(free_body(value, 1, 1))
     assert exc.value.field == "body.inertia[0]"
     assert "beyond 1e±4000" in exc.value.constraint and len(str(exc.value)) < 200
+
+
+def test_huge_numbers_give_clear_refusals_not_overflow_errors():
+    """Checks made with float() overflowed past 1e308 (OverflowError tracebacks): the
+    triangle inequality, unit lengths of quaternions, rows and directions."""
+    cases = [
+        (free_body("1e400", 1, 1), "body.inertia"),
+        (heavy_top(["1e400", "0", "0"]), "forces.heavy_top.up"),
+    ]
+    q = free_body(1, 1, 1)
+    q["initial"]["quaternion"] = ["1e400", "0", "0", "0"]
+    cases.append((q, "initial.quaternion"))
+    m = free_body(1, 1, 1)
+    m["initial"]["matrix"] = [["1e400", "0", "0"], ["0", "1", "0"], ["0", "0", "1"]]
+    cases.append((m, "initial.matrix"))
+    for d, field in cases:
+        with pytest.raises(SceneError) as exc:
+            Scene.from_dict(d)
+        assert exc.value.field == field
+    with pytest.raises(SceneError, match=r"1e400 \+ 1 < 1|1 \+ 1 < 1e400"):
+        Scene.from_dict(free_body(1, 1, "1e400"))
+
+
+@pytest.mark.parametrize("anomaly", ["1e25", "123456789012345678901234567.5", "1e400"])
+def test_a_huge_angle_is_reduced_exactly(anomaly):
+    """The mean anomaly 1e400 made Kepler's equation fail (ArithmeticError), and 1e25 came
+    back as noise: reduced at the working precision only. Now it equals its exact reduction."""
+    from cayley_heyoka.orbit import elements as el
+
+    with mpmath.workdps(600):
+        x = mpmath.mpf(anomaly)
+        reduced = mpmath.nstr(x - 2 * mpmath.pi * mpmath.nint(x / (2 * mpmath.pi)), 60)
+    with mpmath.workdps(40):
+        a = el.elements_to_cartesian(el.Elements("1", "0.1", "0.3", "0.2", "0.4", anomaly), "1")
+        b = el.elements_to_cartesian(el.Elements("1", "0.1", "0.3", "0.2", "0.4", reduced), "1")
+        assert max(abs(u - w) for u, w in zip(a[0], b[0], strict=True)) < mpmath.mpf(10) ** -38

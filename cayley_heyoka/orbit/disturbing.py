@@ -231,8 +231,10 @@ class ThirdBody:
         return exact_fraction(self.eccentricity) == 0
 
     @property
-    def pericentre(self) -> float:
-        return float(exact_fraction(self.a) * (1 - exact_fraction(self.eccentricity)))
+    def pericentre(self) -> mpmath.mpf:
+        """a(1 − e) at the current mpmath precision (a float overflows past 1e308)."""
+        q = exact_fraction(self.a) * (1 - exact_fraction(self.eccentricity))
+        return mpmath.mpf(q.numerator) / q.denominator
 
     def axes(self, ctx: Context) -> tuple[list, list]:
         """P̂ (towards the pericentre) and Q̂ (90° ahead) of the perturber's orbit, in mpmath;

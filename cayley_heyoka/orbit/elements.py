@@ -177,7 +177,17 @@ class _Kind:
         return self.atan2(y + 0, x)
 
     def reduce(self, x: Any) -> Any:
-        """``x`` reduced modulo 2π into ``(−π, π]``; an angle already in range is unchanged."""
+        """``x`` reduced modulo 2π into ``(−π, π]``; an angle already in range is unchanged.
+
+        In mpmath a large angle is reduced with as many more bits as its integer part has, so
+        that the result is right to the working precision (at the working precision alone,
+        1e25 would come back as noise, and 1e400 out of range).
+        """
+        if self.multiprecision and mpmath.mag(x) > 3:
+            with mpmath.workprec(mpmath.mp.prec + int(mpmath.mag(x)) + 10):
+                two_pi = 2 * mpmath.pi
+                x = x - two_pi * mpmath.ceil((x - mpmath.pi) / two_pi)
+            x = +x
         two_pi = 2 * self.pi
         y = x - two_pi * self.ceil((x - self.pi) / two_pi)
         y = self.where(y > self.pi, y - two_pi, y)
@@ -192,10 +202,20 @@ def _is_multiprecision(value: Any) -> bool:
     return False
 
 
+def _exact_mpf(value: Any, name: str) -> mpmath.mpf:
+    """``value`` in mpmath, with the bits of its integer part on top of the working precision:
+    an angle is reduced modulo 2π from it, and needs them (see :meth:`_Kind.reduce`)."""
+    x = to_mpf(value, name)
+    if isinstance(value, str) and mpmath.mag(x) > 3:
+        with mpmath.workprec(mpmath.mp.prec + int(mpmath.mag(x)) + 10):
+            x = to_mpf(value, name)
+    return x
+
+
 def _prepare(named: list[tuple[str, Any]]) -> tuple[_Kind, list[Any]]:
     """Choose the arithmetic for the inputs and convert them to it, checking finiteness."""
     if any(_is_multiprecision(value) for _, value in named):
-        values = [to_mpf(value, name) for name, value in named]
+        values = [_exact_mpf(value, name) for name, value in named]
         f = functions_for(mpmath.mpf(1))
         kind = _Kind(
             True,

@@ -115,7 +115,7 @@ def check(scene: Scene) -> None:
                     "perturbations.third_body.degree",
                     f"the Legendre expansion assumes the body inside the perturber's orbit, but "
                     f"the orbit's apocentre {mpmath.nstr(apo, 6)} is not below the perturber's "
-                    f"pericentre {third.pericentre:.6g}; drop 'degree' for the exact Ω",
+                    f"pericentre {mpmath.nstr(third.pericentre, 6)}; drop 'degree' for the exact Ω",
                 )
         plane = orbit.plane
         turning = plane is not None and (

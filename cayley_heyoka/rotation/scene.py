@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
 from ..errors import SceneError
-from ..precision import Number, Precision, exact_fraction
+from ..precision import Number, Precision, exact_fraction, unit_length
 from ..scene import check_keys, number, vector
 from . import attitude as att
 from .forces import parse_forces
@@ -19,7 +20,7 @@ FORMULATIONS = ("rodrigues", "quaternion", "none")
 #: restart of the propagation, so below a few hundred per turn they cost more than the steps;
 #: at 1e-300 every step re-based and the run never ended.
 MIN_CHART_ANGLE = 1
-_UNIT_TOL = 1e-12
+_UNIT_TOL = Fraction(1, 10**12)
 
 
 @dataclass(frozen=True)
@@ -122,6 +123,7 @@ class RigidBody:
 
 def _check_inertia(inertia: tuple[Number, Number, Number]) -> None:
     A, B, C = (exact_fraction(v) for v in inertia)
+    text = dict(zip("ABC", inertia, strict=True))  # as written: float() overflows past 1e308
     for name, v in zip("ABC", (A, B, C), strict=True):
         if v <= 0:
             raise SceneError("body.inertia", f"moment {name} must be > 0, got {v}")
@@ -134,7 +136,7 @@ def _check_inertia(inertia: tuple[Number, Number, Number]) -> None:
             raise SceneError(
                 "body.inertia",
                 f"violates the triangle inequality {n1} + {n2} >= {n3} "
-                f"({float(a)} + {float(b)} < {float(c)}): no rigid body has these moments",
+                f"({text[n1]} + {text[n2]} < {text[n3]}): no rigid body has these moments",
             )
 
 
@@ -144,15 +146,19 @@ def _parse_attitude(kind: str, value: Any) -> tuple[str, Any]:
         return kind, vector(value, where, 3)
     if kind == "quaternion":
         q = vector(value, where, 4)
-        norm = float(sum(exact_fraction(c) ** 2 for c in q)) ** 0.5
-        if abs(norm - 1) > _UNIT_TOL:
+        unit, norm = unit_length(q, _UNIT_TOL)
+        if not unit:
             raise SceneError(
-                where, f"is not a rotation: a unit quaternion is needed, norm is {norm:.17g}"
+                where, f"is not a rotation: a unit quaternion is needed, norm is {norm}"
             )
         return kind, q
     if not isinstance(value, list | tuple) or len(value) != 3:
         raise SceneError(where, "must be a 3x3 list of rows")
     rows = tuple(vector(row, f"{where}[{i}]", 3) for i, row in enumerate(value))
+    # Rows of a rotation are unit vectors; checked exactly first (float() overflows past 1e308).
+    for i, row in enumerate(rows):
+        if not unit_length(row, _UNIT_TOL)[0]:
+            raise SceneError(where, f"is not a rotation: row {i} is not a unit vector")
     M = np.array([[float(exact_fraction(v)) for v in row] for row in rows])
     defect = float(np.max(np.abs(M.T @ M - np.eye(3))))
     det = float(np.linalg.det(M))
