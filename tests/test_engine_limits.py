@@ -1,0 +1,180 @@
+"""The engine's limits: the step budget, chunked propagation (bit-identical to one call),
+interruption keeping results, refusals before compiling, and signals while compiling."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from helpers import free_body
+
+import cayley_heyoka as ch
+from cayley_heyoka import engine
+from cayley_heyoka.errors import IntegrationError, Interrupted, SceneError
+
+HEAVY_TOP = {"heavy_top": {"weight": "1", "center_of_mass": ["0.1", "-0.05", "0.3"]}}
+
+
+def _scene(prec="double", **tables) -> ch.Scene:
+    """A heavy top with invariable-plane events and chart re-basings (terminal events)."""
+    data = free_body(
+        forces=HEAVY_TOP,
+        attitude={"max_chart_angle": 60},
+        integrator={"precision": prec, **tables.pop("integrator", {})},
+        output={"times": {"start": "0", "stop": "40", "count": 81}, "events": ["invariable_plane"]},
+        **tables,
+    )
+    return ch.Scene.from_dict(data)
+
+
+def _same(a: ch.Result, b: ch.Result, rows: int | None = None) -> None:
+    """Bit-for-bit equality of two results (of their first ``rows`` rows)."""
+    prec = a.precision
+    n = len(a.t) if rows is None else rows
+    for name in [*a.variables, *a.monitors]:
+        assert np.array_equal(prec.to_text(a[name][:n]), prec.to_text(b[name][:n])), name
+
+
+@pytest.mark.parametrize("prec", ["double", "quad"])
+def test_chunks_of_a_few_steps_change_no_bit(monkeypatch, prec):
+    """Propagation cut every 7 steps (a signal could stop any of these) gives the bits, events
+    and counters of one uninterrupted call."""
+    whole = ch.run(_scene(prec))
+    monkeypatch.setattr(engine, "_FIRST_CHUNK", 7)
+    monkeypatch.setattr(engine, "_next_chunk", lambda chunk, seconds: chunk)
+    chunked = ch.run(_scene(prec))
+    assert whole.counters == chunked.counters and whole.counters["rebasings"] > 3
+    _same(whole, chunked)
+    for name, log in whole.events.items():
+        assert len(log) > 5
+        assert np.array_equal(
+            whole.precision.to_text(log.time), whole.precision.to_text(chunked.events[name].time)
+        )
+
+
+def test_step_budget_stops_cleanly_and_keeps_the_same_bits():
+    whole = ch.run(_scene())
+    budget = whole.counters["steps"] // 2
+    with pytest.raises(IntegrationError) as info:
+        ch.run(_scene(integrator={"max_steps": budget}))
+    part = info.value.result
+    assert part.status == -1 and f"integrator.max_steps = {budget}" in part.message
+    assert part.counters["steps"] == budget
+    assert 10 < len(part.t) < len(whole.t)
+    _same(part, whole, rows=len(part.t))
+
+
+def test_interrupt_keeps_what_was_computed(monkeypatch):
+    """SIGINT during propagation (sent from the progress callback, so at a known time): an
+    Interrupted carrying the rows computed, the same bits as the uninterrupted run."""
+    whole = ch.run(_scene())
+
+    def progress(t: float) -> None:
+        if t > 15:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(Interrupted) as info:
+        ch.run(_scene(), progress=progress)
+    part = info.value.result
+    assert part.status == engine.INTERRUPTED and "interrupted (SIGINT)" in part.message
+    assert 30 <= len(part.t) < len(whole.t)
+    _same(part, whole, rows=len(part.t))
+    # Python's handler is back: Ctrl-C outside a run is a KeyboardInterrupt again.
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        (
+            {
+                "body": {"inertia": ["1e307", "1.5e307", "2.5e307"]},
+                "initial": {"rates": [10, 20, 30]},
+            },
+            "monitors.energy",
+            "inf",
+        ),
+        ({"initial": {"rates": ["1e200", "0", "0"]}}, "monitors.", "finite"),
+        (
+            {"forces": {"potential": {"V": "R33 + 1/0"}}},
+            "monitors.energy",
+            "must be finite",
+        ),
+        ({"integrator": {"max_step": "1e-300"}}, "integrator.max_step", "step budget"),
+        (
+            {"integrator": {"max_step": "0.001", "max_steps": 1000}},
+            "integrator.max_step",
+            "1e+04 steps",
+        ),
+        (
+            {"output": {"times": {"start": "0", "stop": "1", "count": 9_000_000}}},
+            "output.times",
+            "GiB",
+        ),
+        ({"output": {"times": ["0.1", "0.10000000000000000001"]}}, "output.times", "double"),
+    ],
+)
+def test_refused_before_integrating(change, field, words):
+    with pytest.raises(SceneError) as info:
+        ch.run(ch.Scene.from_dict(free_body(**change)))
+    assert info.value.field.startswith(field) and words in str(info.value)
+
+
+def test_times_distinct_in_quad_run_in_quad():
+    """The same times are distinct in quad: the run records both."""
+    data = free_body(
+        integrator={"precision": "quad"}, output={"times": ["0.1", "0.10000000000000000001"]}
+    )
+    result = ch.run(ch.Scene.from_dict(data))
+    assert len(result.t) == 2 and result.t[1] > result.t[0]
+
+
+def test_a_run_going_non_finite_logs_nothing(capfd):
+    data = free_body(
+        forces={"potential": {"V": "exp(100 * (t - 6)) * lambda"}},
+        output={"times": {"start": "0", "stop": "20", "count": 21}},
+    )
+    with pytest.raises(IntegrationError):
+        ch.run(ch.Scene.from_dict(data))
+    captured = capfd.readouterr()
+    assert "warning" not in captured.err + captured.out
+
+
+SLOW_COMPILE = """
+[body]
+inertia = [1.0, 1.5, 2.5]
+[initial]
+rates = [0.125, 0.25, 1.0]
+[forces.potential]
+V = "{V}"
+[integrator]
+precision = "quad"
+compact_mode = false
+[output]
+times = [0, 1]
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_during_compilation_ends_the_process_at_once(tmp_path, sig):
+    """This scene compiles for minutes (non-compact quad); the signal ends it within seconds."""
+    V = " + ".join(f"{i}*sin(R33*{i % 7 + 1})*cos(R13*{i % 5 + 1})" for i in range(1, 120))
+    scene = tmp_path / "slow.toml"
+    scene.write_text(SLOW_COMPILE.format(V=V))
+    cmd = [sys.executable, "-m", "cayley_heyoka.cli", "run", str(scene), "--no-progress"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(5)
+        sent = time.monotonic()
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    # Killed by the signal while compiling, or (on a slow start) interrupted just before.
+    assert proc.returncode in (-sig, 130), err
+    assert time.monotonic() - sent < 15 and "Traceback" not in err
