@@ -25,7 +25,6 @@ import mpmath
 import numpy as np
 
 from ..checks import CheckOptions, CheckReport, CheckRow, flow_sensitivity, round_off_scale
-from ..errors import SceneError
 from ..precision import exact_fraction
 from ..scene import Scene
 from .attitude import quaternion_multiply
@@ -46,8 +45,9 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
     * forced: option ``method``: ``elements`` (Cayley's 1846 element equations,
       :func:`~.element_check.check_element_equations`, with its options ``upsilon0``,
       ``samples`` and ``nodes``) or ``twin`` (:func:`check_twin`). Default: ``elements``
-      where the passage of υ₀ can be followed along the whole run, else ``twin`` (the report
-      says why); giving ``upsilon0``, ``samples`` or ``nodes`` means ``elements``.
+      where it applies (a force function of the state alone, and a passage of υ₀ that can be
+      followed along the whole run), else ``twin`` (the report says why); giving
+      ``upsilon0``, ``samples`` or ``nodes`` means ``elements``.
     """
     if scene.model.torque_free:
         options.accept(("times",), "closed-form check of a torque-free body")
@@ -67,13 +67,11 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
             upsilon0=options.text("upsilon0"),
             nodes=options.integer("nodes"),
         )
-    except SceneError:
-        raise
-    except ValueError as exc:
+    except ValueError as exc:  # SceneError included: e.g. a force function of t
         chosen = method or any(options.text(k) is not None for k in element_keys)
         if chosen:
             raise
-        return check_twin(scene, why=f"Cayley's elements cannot be followed along it ({exc})")
+        return check_twin(scene, why=f"Cayley's element check does not apply ({exc})")
 
 
 def check_closed_form(scene: Scene, times: int | None = None) -> CheckReport:
