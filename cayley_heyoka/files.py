@@ -79,6 +79,11 @@ class OutputError(ValueError):
         self.what = what
         super().__init__(f"{path}: {what}")
 
+    @classmethod
+    def failed_write(cls, path: str | Path, exc: OSError) -> OutputError:
+        """A write to ``path`` that failed with ``exc`` and left the previous file as it was."""
+        return cls(path, f"could not be written ({exc.strerror or exc}); nothing changed")
+
 
 # ---------------------------------------------------------------------- destinations
 def check_destination(path: str | Path, kind: str, *, overwrite: bool = False) -> None:
@@ -207,7 +212,7 @@ class Staged:
             _fsync_directory(self.target.parent)
         except OSError as exc:
             self.discard()
-            raise OutputError(self.path, f"could not be written ({_reason(exc)})") from exc
+            raise OutputError.failed_write(self.path, exc) from exc
 
     def discard(self) -> None:
         """Remove the temporary (the destination is untouched)."""
@@ -229,7 +234,7 @@ def write_atomically(path: str | Path, fill: Callable[[Path], None]) -> None:
         fill(staged.tmp)
     except OSError as exc:
         staged.discard()
-        raise OutputError(path, f"could not be written ({_reason(exc)}); nothing changed") from exc
+        raise OutputError.failed_write(path, exc) from exc
     except BaseException:
         staged.discard()
         raise

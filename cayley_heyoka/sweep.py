@@ -298,7 +298,10 @@ def _command(args: Any) -> int:
     except SceneError as exc:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
-    except (RuntimeError, OSError, OutputError) as exc:  # failed midway: the file is kept
+    except OutputError as exc:  # the file could not be written: the previous one stays
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    except (RuntimeError, OSError) as exc:  # a backend that failed midway: the file is kept
         print(f"error: {exc}", file=sys.stderr)
         if args.out and args.out.exists():
             print(f"what was computed is in {args.out}", file=sys.stderr)

@@ -343,12 +343,14 @@ class Writer:
     """The sweep file, created with every member ``NOT_RUN`` and filled chunk by chunk.
 
     It is filled under a temporary name beside ``path`` and put in place by :meth:`close`
-    (also when the sweep stops midway): a sweep killed outright leaves the previous file.
+    (also when the sweep stops midway): a sweep killed outright leaves the previous file, and
+    so does one whose writing failed (a full disk: :class:`OutputError`).
     """
 
     def __init__(self, path: str | Path, result: SweepResult) -> None:
         import h5py
 
+        self.path = path
         self.staged = Staged(path)
         self.file = None
         try:
@@ -356,16 +358,27 @@ class Writer:
             _create(self.file, result)
             self.file.flush()
         except BaseException as exc:
-            if self.file is not None:
-                self.file.close()
-            self.staged.discard()
-            if isinstance(exc, OSError):
-                raise OutputError(path, f"could not be written ({exc})") from exc
-            raise
+            self._abandon(exc)
+
+    def _abandon(self, exc: BaseException) -> None:
+        """Drop the temporary (the previous file stays) and raise ``exc``."""
+        if self.file is not None:
+            self.file.close()
+            self.file = None
+        self.staged.discard()
+        if isinstance(exc, OSError):
+            raise OutputError.failed_write(self.path, exc) from exc
+        raise exc
 
     def write(self, part: Chunk, prec: Precision) -> None:
+        try:
+            self._write(part, prec)
+        except OSError as exc:
+            self._abandon(exc)
+
+    def _write(self, part: Chunk, prec: Precision) -> None:
         f, rows = self.file, np.asarray(part.index)
-        if not len(rows):
+        if f is None or not len(rows):
             return
         # h5py's fancy indexing wants increasing indices.
         order = np.argsort(rows)
@@ -382,14 +395,14 @@ class Writer:
         f.flush()
 
     def close(self, metadata: dict[str, Any]) -> None:
+        if self.file is None:  # abandoned after a failed write
+            return
         try:
             self.file.attrs["metadata"] = json.dumps(metadata)
             seal(self.file)
             self.file.close()
-        except BaseException:
-            self.file.close()
-            self.staged.discard()
-            raise
+        except BaseException as exc:
+            self._abandon(exc)
         self.staged.commit()
 
 

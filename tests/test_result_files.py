@@ -315,6 +315,36 @@ def test_sigkill_during_a_save_keeps_the_previous_file(tmp_path, result, quad_re
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.h5", "source.h5"]
 
 
+def test_sweep_whose_file_cannot_be_written_keeps_the_previous_one(tmp_path, capsys, monkeypatch):
+    from cayley_heyoka import sweep_result
+
+    (tmp_path / "body.toml").write_text(
+        "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [1, 0.1, 0.2]\n"
+        "[output]\ntimes = [0, 1]\n"
+    )
+    (tmp_path / "study.toml").write_text(
+        'scene = "body.toml"\n[sweep]\nkind = "grid"\n[sweep.parameters]\n'
+        '"initial.rates[0]" = { start = 0.5, stop = 1.0, count = 4 }\n'
+        '[run]\nbackend = "local"\n'
+    )
+    out = tmp_path / "sweep.h5"
+    out.write_bytes((DATA / "sweep_v1.h5").read_bytes())
+    calls = []
+
+    def full_disk_on_the_second_chunk(self, part, prec):
+        calls.append(len(part.index))
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(sweep_result.Writer, "_write", full_disk_on_the_second_chunk)
+    argv = ["sweep", str(tmp_path / "study.toml"), "--out", str(out), "--chunk", "2"]
+    assert main([*argv, "--no-progress"]) == 1
+    assert "No space left on device); nothing changed" in capsys.readouterr().err
+    assert calls == [2, 2]
+    assert out.read_bytes() == (DATA / "sweep_v1.h5").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["body.toml", "study.toml", "sweep.h5"]
+
+
 # ---------------------------------------------------------------------- reference work dirs
 def _reference_scene() -> Scene:
     return Scene.from_dict(free_body(output={"times": {"start": 0, "stop": 1, "count": 3}}))
