@@ -212,6 +212,8 @@ def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckRepor
     check = FAMILIES[scene.family].consistency_check
     if check is None:
         raise SceneError("scene", f"no consistency check for the {scene.family} family")
+    if len(scene.output.time_grid(scene.integrator.precision)) < 2:
+        raise SceneError("output.times", "a check needs a time span: give at least two times")
     return check(scene, options or CheckOptions())
 
 

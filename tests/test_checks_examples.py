@@ -147,3 +147,10 @@ def test_a_force_function_of_time_is_checked_by_the_twin():
     )
     with pytest.raises(ValueError, match="forces"):
         check_scene(scene, CheckOptions({"method": "elements"}))
+
+
+def test_a_check_needs_a_time_span():
+    data = load_scene(EXAMPLES / "projectile.toml").to_dict()
+    data["output"]["times"] = ["0.0"]
+    with pytest.raises(ValueError, match="output.times: a check needs a time span"):
+        check_scene(Scene.from_dict(data))

@@ -62,10 +62,11 @@ def check_projectile(scene: Scene) -> CheckReport:
     -------
     CheckReport
         One row per group (η, ϖ, S): the largest absolute difference from the closed form at
-        the output times, against ``10 ε √N s + ε max|x|`` with N the run's steps and s the
-        largest change of the group per unit change δ of the initial state, over each of
-        η₀ᵢ moved by δ max|η| and ϖ₀ᵢ by δ max|ϖ| (and, for S, S₀ by δ max|S|), measured on
-        the closed form at 16 times over the span.
+        the output times, against ``10 ε √N s + 10 ε max(1, max|x|)`` (the second term for the
+        rounding of the recorded values and the closed form's own error), with N the run's
+        steps and s the largest change of the group per unit change δ of the initial state,
+        over each of η₀ᵢ moved by δ max|η| and ϖ₀ᵢ by δ max|ϖ| (and, for S, S₀ by δ max|S|),
+        measured on the closed form at 16 times over the span.
     """
     from ..engine import run
     from ..reference_run import closed_form_for
@@ -100,7 +101,7 @@ def check_projectile(scene: Scene) -> CheckReport:
             CheckRow(
                 f"{group} − closed form",
                 error,
-                K * s[group] + prec.epsilon * sizes[group],
+                K * s[group] + 10 * prec.epsilon * max(sizes[group], 1.0),
                 f"10 ε √N × sensitivity; N = {steps}, sensitivity {s[group]:.3g}",
             )
         )

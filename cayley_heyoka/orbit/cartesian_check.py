@@ -93,6 +93,9 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
         if twin in ("cartesian", "encke"):
             data["orbit"].pop("sigma0", None)
         what = f"the {twin} formulation"
+    grid = own.output.time_grid(prec)
+    # The sensitivity first: an orbit it cannot bound is refused before any run.
+    s = _sensitivity(own, float(grid[-1] - grid[0]))
     a, b = run(own), run(Scene.from_dict(data))
     steps = int(a.counters.get("steps", 0)) + (
         0 if twin == "precision" else int(b.counters.get("steps", 0))
@@ -100,7 +103,6 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
     tolerance = own.integrator.tolerance
     K = round_off_scale(steps, prec.epsilon, None if tolerance is None else float(tolerance))
     t = np.asarray(a.t, dtype=float)
-    s = _sensitivity(own, float(t[-1] - t[0]))
     rows, series = [], {"t": t}
     for name, axes in (("position", _STATE[:3]), ("velocity", _STATE[3:])):
         d = [_difference(a[n], b[n]) for n in axes]

@@ -177,11 +177,13 @@ def _attitude_rows(
     """Rows for the rates, the quaternion and the Rodrigues parameters, from their errors, the
     round-off scale K and the sensitivities ``s`` (see the Notes of :func:`check_closed_form`)."""
     law = f"10 ε √N × sensitivity; N = {steps}"
+    # The recorded rates are rounded once more: 10 ε of their size (all the bound at t₀).
+    rates = np.sqrt(sum(np.asarray(variables[n], dtype=float) ** 2 for n in "pqr"))
     rows = [
         CheckRow(
             f"p, q, r − {against}",
             max(float(np.max(errors[n])) for n in "pqr"),
-            K * s["rates"],
+            K * s["rates"] + 10 * prec.epsilon * float(np.max(rates)),
             f"{law}, sensitivity {s['rates']:.3g}",
         )
     ]
