@@ -124,12 +124,13 @@ class IntegratorOptions:
         tolerance = None if tol == "auto" else number(tol, "integrator.tolerance", positive=True)
         # heyoka's order grows like -log(tol): below epsilon it buys no accuracy, only a longer
         # compilation (1e-310 in double compiled for 14 minutes and 3 GB before it was killed).
-        epsilon = Fraction(2) ** (1 - precision.bits)
+        # (Relative slack 2^-20: epsilon's shortest decimal text may fall just below it.)
+        epsilon = Fraction(2) ** (1 - precision.bits) * (1 - Fraction(1, 2**20))
         if tolerance is not None and exact_fraction(tolerance) < epsilon:
             raise SceneError(
                 "integrator.tolerance",
                 f"must be >= the epsilon of {precision.name}, 2^{1 - precision.bits} = "
-                f"{precision.epsilon:.3g} (a smaller one buys no accuracy), got {tolerance}; "
+                f"{precision.epsilon!r} (a smaller one buys no accuracy), got {tolerance}; "
                 "raise the precision instead",
             )
         compact = table.get("compact_mode", "auto")

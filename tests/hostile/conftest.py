@@ -27,7 +27,8 @@ Use the ``hostile`` fixture::
 ``run`` calls ``cayley_heyoka.cli.main(argv)`` in this process with the output captured at
 the file-descriptor level (so heyoka's C++ log lines are seen); ``process`` starts
 ``python -m cayley_heyoka.cli`` and, if ``send`` is given, sends that signal once
-``wait_for`` appears in its stderr (or ``delay`` seconds after start). Both return an
+``wait_for`` (text or a compiled regular expression) appears in its stderr, ``delay`` seconds
+later. Both return an
 :class:`Outcome` after asserting the contract above, plus ``expect`` (a class or a set of
 classes) and ``field`` (text that the refusal line must contain).
 """
@@ -37,6 +38,7 @@ from __future__ import annotations
 import collections
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -163,7 +165,7 @@ class Runner:
         argv: list[str],
         *,
         send: int | None = None,
-        wait_for: str | None = None,
+        wait_for: str | re.Pattern[str] | None = None,
         delay: float = 0.0,
         expect: str | Iterable[str] | None = None,
         field: str | None = None,
@@ -181,11 +183,13 @@ class Runner:
         )
         err_chunks: list[bytes] = []
         seen = threading.Event()
+        pattern = re.compile(re.escape(wait_for)) if isinstance(wait_for, str) else wait_for
 
         def read_err() -> None:
             while chunk := proc.stderr.read1(4096):
                 err_chunks.append(chunk)
-                if wait_for is None or wait_for.encode() in b"".join(err_chunks):
+                text = b"".join(err_chunks).decode(errors="replace")
+                if pattern is None or pattern.search(text):
                     seen.set()
             seen.set()
 
