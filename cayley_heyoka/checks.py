@@ -207,6 +207,7 @@ def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckRepor
     ValueError
         When the check cannot be carried through, naming the reason.
     """
+    from .engine import preflight
     from .families import FAMILIES
 
     check = FAMILIES[scene.family].consistency_check
@@ -214,6 +215,7 @@ def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckRepor
         raise SceneError("scene", f"no consistency check for the {scene.family} family")
     if len(scene.output.time_grid(scene.integrator.precision)) < 2:
         raise SceneError("output.times", "a check needs a time span: give at least two times")
+    preflight(scene)  # some checks integrate their own way: refuse what a run would
     return check(scene, options or CheckOptions())
 
 

@@ -225,6 +225,16 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
 INTERRUPTED = -2
 
 
+def preflight(scene: Scene) -> None:
+    """Raise the :class:`SceneError` that :func:`run` would raise before integrating, if any.
+
+    For computations that integrate a scene their own way (consistency checks, variational
+    equations): the same refusals as a run. Compiles the scene's integrator (or takes it from
+    the cache, where a later :func:`run` finds it).
+    """
+    Propagation(scene)
+
+
 class Propagation:
     """One scene's integration, advanced stretch by stretch; :func:`run` is one stretch.
 

@@ -664,6 +664,9 @@ def _main(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
+    except SceneError as exc:  # found when the model is built or its output times rounded
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
     except (ValueError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2 if isinstance(exc, ValueError) else 1

@@ -439,3 +439,41 @@ def test_signal_during_a_run_keeps_its_results(hostile, tmp_path, sig):
     assert f"interrupted ({signal.Signals(sig).name})" in o.stderr
     result = load_result(out)
     assert result.status != 0 and "interrupted" in result.message and len(result.t) >= 1
+
+
+# ---------------------------------------------------------------------- every verb
+def _collapsing() -> dict:
+    data = small("free_body")
+    data["output"]["times"] = [Raw("0.1"), Raw("0.10000000000000000001"), 1]
+    return data
+
+
+def _infinite_energy() -> dict:
+    return {
+        "hamiltonian": {"H": "varpi1**2/2 + eta1**2/2 + 1/0"},
+        "initial": {"eta": [1], "varpi": [0]},
+        "output": {"times": [0, 1]},
+    }
+
+
+@pytest.mark.parametrize("verb", ["run", "check", "reference"])
+@pytest.mark.parametrize(
+    ("build", "field"),
+    [(_collapsing, "output.times"), (_infinite_energy, "monitors.energy")],
+    ids=["times-collapse", "energy-infinite"],
+)
+def test_refusals_found_when_the_model_is_built_reach_every_verb(
+    hostile, tmp_path, verb, build, field
+):
+    scene = hostile.scene(build())
+    o = hostile.run(_argv(verb, scene, tmp_path), expect="refused", field=field)
+    assert str(scene) in o.error_line
+
+
+def test_study_whose_scene_times_collapse(hostile, tmp_path):
+    (tmp_path / "collapse.toml").write_text(toml(_collapsing()))
+    study = hostile.scene(
+        'scene = "collapse.toml"\n[sweep]\nkind = "grid"\n'
+        '[sweep.parameters]\n"initial.rates[0]" = [0.1, 0.2]\n'
+    )
+    hostile.run(["sweep", str(study), "--no-progress"], expect="refused", field="output.times")
