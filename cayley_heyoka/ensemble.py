@@ -231,7 +231,7 @@ def propagate_ensemble(
         compiled, cached = engine.compile_model(model, options)
         template, compile_seconds = compiled.integrator, 0.0 if cached else compiled.compile_seconds
     pars = prec.array(model.pars.values[: model.integrator_parameters()])
-    limit = {}
+    limit: dict[str, Any] = {"max_steps": options.max_steps}  # the step budget, per member
     if options.max_step is not None:
         limit["max_delta_t"] = prec.number(options.max_step)
 

@@ -417,7 +417,7 @@ def _ensemble_group(
     held = len(compiled.integrator.pars)
     starts = [prec.array(model.initial_state) for _, _, model in group]
     pars = [prec.array(model.pars.values) for _, _, model in group]
-    limit = {}
+    limit: dict[str, Any] = {"max_steps": scene0.integrator.max_steps}  # the step budget
     if scene0.integrator.max_step is not None:
         limit["max_delta_t"] = prec.number(scene0.integrator.max_step)
 
