@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import heyoka as hy
+import numpy as np
 import pytest
 from helpers import free_body
 
-from cayley_heyoka import Scene, SceneError
+from cayley_heyoka import Precision, Scene, SceneError, load_scene
+from cayley_heyoka.expressions import parse_expression
+from cayley_heyoka.model import ParTable
+from cayley_heyoka.scene import DEFAULT_MAX_STEPS
 
 
 def refuse(data, field, words):
@@ -128,3 +135,113 @@ def test_decimal_text_is_kept_from_toml():
     )
     assert scene.model.rates == ("0.1", "0.2", "0.3")
     assert scene.model.formulation == "none"
+
+
+@pytest.mark.parametrize(
+    ("prec", "tol", "ok"),
+    [
+        ("double", "2.220446049250313e-16", True),  # epsilon's shortest text
+        ("double", "2.2e-16", False),
+        ("double", "1e-310", False),
+        ("quad", "1e-33", True),
+        ("quad", "1e-35", False),
+        ({"bits": 256}, "1e-76", True),
+        ({"bits": 256}, "1e-78", False),
+    ],
+)
+def test_tolerance_not_below_epsilon(prec, tol, ok):
+    data = free_body(integrator={"precision": prec, "tolerance": tol})
+    if ok:
+        Scene.from_dict(data)
+    else:
+        refuse(data, "integrator.tolerance", "raise the precision")
+
+
+@pytest.mark.parametrize(("budget", "ok"), [(1, True), (10**12, True), (0, False), (True, False)])
+def test_step_budget(budget, ok):
+    data = free_body(integrator={"max_steps": budget})
+    if ok:
+        assert Scene.from_dict(data).integrator.max_steps == budget
+    else:
+        refuse(data, "integrator.max_steps", "integer >= 1")
+
+
+def test_step_budget_default():
+    assert Scene.from_dict(free_body()).integrator.max_steps == DEFAULT_MAX_STEPS == 10**9
+
+
+def test_output_times_distinct_only_once_rounded():
+    close = ["0.1", "0.10000000000000000001"]
+    double = Scene.from_dict(free_body(output={"times": close}))
+    with pytest.raises(SceneError, match=r"output.times: .* in double: times \[0\] and \[1\]"):
+        double.output.time_grid(double.integrator.precision)
+    assert len(double.output.time_grid(Precision("quad"))) == 2
+    grid = free_body(output={"times": {"start": "1", "stop": "1.0000000000000000001", "count": 3}})
+    scene = Scene.from_dict(grid)
+    with pytest.raises(SceneError, match="output.times"):
+        scene.output.time_grid(Precision("double"))
+
+
+def test_too_many_output_times():
+    refuse(
+        free_body(output={"times": {"start": 0, "stop": 1, "count": 10**7 + 1}}),
+        "output.times.count",
+        "at most",
+    )
+
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        (None, "no such file"),
+        ("directory", "is a directory"),
+        ("Poincaré".encode("latin-1"), "must be UTF-8"),
+        (b"[body\n", "not valid TOML"),
+        (("a = " + "[" * 3000 + "]" * 3000).encode(), "nested deeper than 16"),
+        (("a = " + "[" * 20 + "]" * 20).encode(), "nested deeper than 16"),
+    ],
+)
+def test_load_scene_refuses_what_is_not_a_scene_file(tmp_path, content, words):
+    path = tmp_path / "scene.toml"
+    if content == "directory":
+        path.mkdir()
+    elif content is not None:
+        path.write_bytes(content)
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert info.value.field == "scene" and words in info.value.constraint
+
+
+def test_load_scene_reads_an_example():
+    scene = load_scene(Path(__file__).resolve().parent.parent / "examples" / "free_body.toml")
+    assert scene.family == "rotation"
+
+
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [
+        ("+".join(["p"] * 2002), "more than 2000"),
+        ("-" * 101 + "p", "deeper than 100"),
+        ("sin(" * 101 + "p" + ")" * 101, "deeper than 100"),
+        ("p**" * 101 + "p", "deeper than 100"),
+        ("p" + " " * 100_000, "longer than 100000"),
+    ],
+    ids=["operators", "signs", "calls", "powers", "characters"],
+)
+def test_expression_limits(text, words):
+    with pytest.raises(SceneError, match=words):
+        parse_expression(text, {"p": hy.make_vars("p")}, ParTable(), "forces.potential.V")
+
+
+def test_long_sums_are_folded_as_python_would():
+    """1000 terms (1999 operators): built without recursion, the same expression as folding
+    left to right."""
+    p, q = hy.make_vars("p", "q")
+    text = " + ".join(f"{k}*p - q/{k}" for k in range(1, 501))
+    built = parse_expression(text, {"p": p, "q": q}, ParTable(), "V")
+    expected = 1.0 * p - q / 1.0
+    for k in range(2, 501):
+        expected = expected + float(k) * p - q / float(k)
+    values = np.array([[0.3], [-1.7]])
+    both = hy.cfunc([built, expected], [p, q])(values)
+    assert both[0, 0] == both[1, 0]
