@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -26,7 +27,11 @@ def _scene(prec="double", **tables) -> ch.Scene:
         forces=HEAVY_TOP,
         attitude={"max_chart_angle": 60},
         integrator={"precision": prec, **tables.pop("integrator", {})},
-        output={"times": {"start": "0", "stop": "40", "count": 81}, "events": ["invariable_plane"]},
+        output={
+            "times": {"start": "0", "stop": "40", "count": 81},
+            "events": ["invariable_plane"],
+            **tables.pop("output", {}),
+        },
         **tables,
     )
     return ch.Scene.from_dict(data)
@@ -86,6 +91,24 @@ def test_interrupt_keeps_what_was_computed(monkeypatch):
     _same(part, whole, rows=len(part.t))
     # Python's handler is back: Ctrl-C outside a run is a KeyboardInterrupt again.
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_interrupt_without_progress_callback_stops_between_chunks():
+    """No callback: the signal is acted on at the end of a chunk of steps (~0.2 s)."""
+    ch.run(_scene())  # compiled and cached, so that the signal finds the propagation
+    scene = _scene(output={"times": {"start": "0", "stop": "1e6", "count": 101}})
+    timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    t0 = time.monotonic()
+    try:
+        with pytest.raises(Interrupted) as info:
+            ch.run(scene)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - t0 < 10
+    part = info.value.result
+    assert part.status == engine.INTERRUPTED and part.counters["steps"] > 0
+    assert len(part.t) < 101
 
 
 @pytest.mark.parametrize(

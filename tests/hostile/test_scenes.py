@@ -82,6 +82,8 @@ BAD_NUMBERS = [
     ("table", {}),
     ("list", []),
     ("empty", ""),
+    ("huge-exponent", Raw("1e999999999")),
+    ("tiny-exponent", Raw("-1e-999999999")),
 ]
 
 
