@@ -51,7 +51,7 @@ def test_chunks_of_a_few_steps_change_no_bit(monkeypatch, prec):
     and counters of one uninterrupted call."""
     whole = ch.run(_scene(prec))
     monkeypatch.setattr(engine, "_FIRST_CHUNK", 7)
-    monkeypatch.setattr(engine, "_next_chunk", lambda chunk, seconds: chunk)
+    monkeypatch.setattr(engine, "_next_chunk", lambda chunk, seconds, points: chunk)
     chunked = ch.run(_scene(prec))
     assert whole.counters == chunked.counters and whole.counters["rebasings"] > 3
     _same(whole, chunked)
