@@ -25,6 +25,7 @@ _EXPORTS = {
     "EnsembleResult": "ensemble",
     "propagate_ensemble": "ensemble",
     "IntegrationError": "errors",
+    "Interrupted": "errors",
     "SceneError": "errors",
     "Precision": "precision",
     "EventLog": "result",
@@ -36,7 +37,7 @@ _EXPORTS = {
 if TYPE_CHECKING:
     from .engine import clear_cache, compile_model, run
     from .ensemble import EnsembleError, EnsembleResult, propagate_ensemble
-    from .errors import IntegrationError, SceneError
+    from .errors import IntegrationError, Interrupted, SceneError
     from .precision import Precision
     from .result import EventLog, Result
     from .scene import Scene, load_scene
@@ -73,6 +74,7 @@ __all__ = [
     "EnsembleResult",
     "EventLog",
     "IntegrationError",
+    "Interrupted",
     "Precision",
     "Result",
     "Scene",
