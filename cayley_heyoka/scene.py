@@ -213,6 +213,12 @@ class OutputOptions:
             a, b = precision.number(start), precision.number(stop)
             n = precision.number(count - 1)
             grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
+        wild = np.flatnonzero(~np.isfinite(grid))
+        if len(wild):
+            raise SceneError(
+                "output.times",
+                f"time [{wild[0]}] is {grid[wild[0]]} in {precision.name}: the grid overflows",
+            )
         if len(grid) > 1:
             same = np.flatnonzero(~(grid[1:] > grid[:-1]))
             if len(same):

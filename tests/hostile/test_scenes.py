@@ -162,6 +162,7 @@ TIMES = [
         "output.times",
     ),
     ("decreasing", [0, 2, 1], "output.times"),
+    ("grid-overflow", {"start": Raw("-1e308"), "stop": Raw("1e308"), "count": 3}, "output.times"),
     ("repeated", [0, 1, 1], "output.times"),
     ("empty-list", [], "output.times"),
     ("nan-time", [0, Raw("nan")], "output.times[1]"),
@@ -304,6 +305,38 @@ def test_model_values(hostile, name, path, value, field, words):
         field=field,
     )
     assert words in o.error_line
+
+
+def test_encke_orbit_kicked_out_of_its_ellipse_stops_with_its_results(hostile, tmp_path):
+    """A close third body makes the osculating orbit hyperbolic at t ≈ 18: exit 1, the rows
+    before kept, the way on named."""
+    data = {
+        "orbit": {
+            "mu": 1,
+            "formulation": "encke",
+            "position": [1, 0, 0],
+            "velocity": [0, Raw("1.3"), Raw("0.01")],
+        },
+        "perturbations": {
+            "third_body": {
+                "gm": 3,
+                "a": Raw("1.6"),
+                "n": Raw("0.5"),
+                "inclination": Raw("0.1"),
+                "node": 0,
+                "mean_longitude0": Raw("0.3"),
+            }
+        },
+        "output": {"times": {"start": 0, "stop": 100, "count": 11}},
+    }
+    out = tmp_path / "r.h5"
+    o = hostile.run(
+        ["run", str(hostile.scene(data)), "--out", str(out), "--no-progress"],
+        expect="stopped",
+        out=out,
+    )
+    assert "not an ellipse" in o.error_line and "cartesian" in o.error_line
+    assert 1 <= len(load_result(out).t) < 11
 
 
 def test_zero_rates_without_events_run(hostile):
