@@ -4,8 +4,8 @@ A scene is a nested dictionary (the TOML document). Its model family is recognis
 family's table (``[body]`` for rigid-body rotation); the generic tables are
 
 ``[integrator]``
-    ``precision`` ("double", "quad" or ``{bits = N}``), ``tolerance`` ("auto" or a number no
-    smaller than the precision's epsilon), ``compact_mode`` ("auto", true, false),
+    ``precision`` ("double", "quad" or ``{bits = N}``), ``tolerance`` ("auto" or a number in
+    [epsilon, 1) of the precision), ``compact_mode`` ("auto", true, false),
     ``high_accuracy`` (bool), ``max_step`` ("none" or a positive number), ``max_steps`` (the
     step budget, :data:`DEFAULT_MAX_STEPS`).
 ``[output]``
@@ -126,6 +126,10 @@ class IntegratorOptions:
         # compilation (1e-310 in double compiled for 14 minutes and 3 GB before it was killed).
         # (Relative slack 2^-20: epsilon's shortest decimal text may fall just below it.)
         epsilon = Fraction(2) ** (1 - precision.bits) * (1 - Fraction(1, 2**20))
+        if tolerance is not None and exact_fraction(tolerance) >= 1:
+            raise SceneError(
+                "integrator.tolerance", f"must be < 1 (it is a relative error), got {tolerance}"
+            )
         if tolerance is not None and exact_fraction(tolerance) < epsilon:
             raise SceneError(
                 "integrator.tolerance",

@@ -104,6 +104,38 @@ def test_numeric_leaf_of_wrong_type_or_not_finite(hostile, name, path, value):
     hostile.run(["run", str(scene), "--no-progress"], expect="refused", field=_field(path))
 
 
+def _other_leaves(data: Any, path: tuple = ()) -> list[tuple]:
+    """Paths of the text and boolean leaves."""
+    if isinstance(data, dict):
+        return [p for k, v in data.items() for p in _other_leaves(v, (*path, k))]
+    if isinstance(data, list):
+        return [p for i, v in enumerate(data) for p in _other_leaves(v, (*path, i))]
+    text = isinstance(data, str) and not isinstance(data, Raw)
+    return [path] if text or isinstance(data, bool) else []
+
+
+def _other_cases() -> list:
+    return [
+        pytest.param(name, path, id=f"{name}-{'.'.join(map(str, path))}")
+        for name in NAMES
+        for path in _other_leaves(example(name))
+    ]
+
+
+@pytest.mark.parametrize(("name", "path"), _other_cases())
+def test_text_or_boolean_leaf_given_a_number(hostile, name, path):
+    """A number where text or true/false belongs (a title, a precision, a formulation, an
+    event name, an expression, a switch)."""
+    data = small(name)
+    value = 42
+    if path[-1] == "formulation" and "orbit" in path:
+        value = Raw("0.5")
+    scene = hostile.scene(_set(data, path, value))
+    # (hamiltonian.model = 42 is reported through the keys that belong to a model.)
+    field = "hamiltonian." if path[-1] == "model" else _field(path)
+    hostile.run(["run", str(scene), "--no-progress"], expect="refused", field=field)
+
+
 def _table_cases() -> list:
     cases = []
     for name in NAMES:
@@ -184,6 +216,7 @@ INTEGRATOR = [
     ("tolerance-zero", {"tolerance": 0}, "integrator.tolerance"),
     ("tolerance-negative", {"tolerance": Raw("-1e-10")}, "integrator.tolerance"),
     ("tolerance-word", {"tolerance": "tight"}, "integrator.tolerance"),
+    ("tolerance-one", {"tolerance": 1}, "integrator.tolerance"),
     ("max-step-1e-300", {"max_step": Raw("1e-300")}, "integrator.max_step"),
     ("max-step-zero", {"max_step": 0}, "integrator.max_step"),
     ("max-steps-zero", {"max_steps": 0}, "integrator.max_steps"),
