@@ -1,4 +1,4 @@
-"""The engine's limits: the step budget, chunked propagation (bit-identical to one call),
+"""The engine's limits: the step budget, watching for signals (bit-identical to not),
 interruption keeping results, refusals before compiling, and signals while compiling."""
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ import cayley_heyoka as ch
 from cayley_heyoka import engine
 from cayley_heyoka.errors import IntegrationError, Interrupted, SceneError
 
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 HEAVY_TOP = {"heavy_top": {"weight": "1", "center_of_mass": ["0.1", "-0.05", "0.3"]}}
 
 
@@ -45,20 +47,43 @@ def _same(a: ch.Result, b: ch.Result, rows: int | None = None) -> None:
         assert np.array_equal(prec.to_text(a[name][:n]), prec.to_text(b[name][:n])), name
 
 
-@pytest.mark.parametrize("prec", ["double", "quad"])
-def test_chunks_of_a_few_steps_change_no_bit(monkeypatch, prec):
-    """Propagation cut every 7 steps (a signal could stop any of these) gives the bits, events
-    and counters of one uninterrupted call."""
-    whole = ch.run(_scene(prec))
-    monkeypatch.setattr(engine, "_FIRST_CHUNK", 7)
-    monkeypatch.setattr(engine, "_next_chunk", lambda chunk, seconds, points: chunk)
-    chunked = ch.run(_scene(prec))
-    assert whole.counters == chunked.counters and whole.counters["rebasings"] > 3
-    _same(whole, chunked)
-    for name, log in whole.events.items():
-        assert len(log) > 5
+def _in_a_thread(scene: ch.Scene) -> ch.Result:
+    """``ch.run`` outside the main thread: no signal can arrive, so no per-step callback."""
+    box = []
+    worker = threading.Thread(target=lambda: box.append(ch.run(scene)))
+    worker.start()
+    worker.join()
+    return box[0]
+
+
+def _orbit(formulation: str) -> ch.Scene:
+    data = ch.load_scene(EXAMPLES / "orbit_j2_third_body.toml").to_dict()
+    data["orbit"]["formulation"] = formulation
+    if formulation == "encke":
+        del data["orbit"]["sigma0"]
+    data["output"]["times"] = {"start": "0", "stop": "30", "count": 61}
+    return ch.Scene.from_dict(data)
+
+
+@pytest.mark.parametrize(
+    "build",
+    [
+        lambda: _scene("double"),
+        lambda: _scene("quad"),
+        lambda: _orbit("encke"),  # time-dependent forces, Encke's rectifications
+        lambda: _orbit("cayley"),
+    ],
+    ids=["heavy-top-double", "heavy-top-quad", "orbit-encke", "orbit-cayley"],
+)
+def test_watching_for_signals_changes_no_bit(build):
+    """The main thread's run (a callback after each step, watching for signals) and a run
+    without it: the same bits, events and counters."""
+    watched, plain = ch.run(build()), _in_a_thread(build())
+    assert watched.counters == plain.counters and watched.counters["steps"] > 50
+    _same(watched, plain)
+    for name, log in watched.events.items():
         assert np.array_equal(
-            whole.precision.to_text(log.time), whole.precision.to_text(chunked.events[name].time)
+            watched.precision.to_text(log.time), plain.precision.to_text(plain.events[name].time)
         )
 
 
@@ -74,7 +99,7 @@ def test_step_budget_stops_cleanly_and_keeps_the_same_bits():
     _same(part, whole, rows=len(part.t))
 
 
-def test_interrupt_keeps_what_was_computed(monkeypatch):
+def test_interrupt_keeps_what_was_computed():
     """SIGINT during propagation (sent from the progress callback, so at a known time): an
     Interrupted carrying the rows computed, the same bits as the uninterrupted run."""
     whole = ch.run(_scene())
@@ -93,8 +118,8 @@ def test_interrupt_keeps_what_was_computed(monkeypatch):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
-def test_interrupt_without_progress_callback_stops_between_chunks():
-    """No callback: the signal is acted on at the end of a chunk of steps (~0.2 s)."""
+def test_interrupt_without_progress_callback_stops_after_a_step():
+    """Without a progress callback the engine's own callback sees the signal (within a step)."""
     ch.run(_scene())  # compiled and cached, so that the signal finds the propagation
     scene = _scene(output={"times": {"start": "0", "stop": "1e6", "count": 101}})
     timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
