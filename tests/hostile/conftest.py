@@ -193,8 +193,14 @@ class Runner:
                     seen.set()
             seen.set()
 
-        reader = threading.Thread(target=read_err, daemon=True)
-        reader.start()
+        out_chunks: list[bytes] = []
+        # Both pipes are read by threads (communicate() would race the stderr reader for data).
+        readers = [
+            threading.Thread(target=read_err, daemon=True),
+            threading.Thread(target=lambda: out_chunks.append(proc.stdout.read()), daemon=True),
+        ]
+        for reader in readers:
+            reader.start()
         try:
             if send is not None:
                 if wait_for is not None:
@@ -202,17 +208,19 @@ class Runner:
                 time.sleep(delay)
                 if proc.poll() is None:
                     proc.send_signal(send)
-            stdout, _ = proc.communicate(timeout=seconds)
-            code = proc.returncode
+            code = proc.wait(timeout=seconds)
         except subprocess.TimeoutExpired:
             proc.kill()
-            stdout, _ = proc.communicate()
+            proc.wait()
             code = None
-        reader.join(timeout=10)
+        for reader in readers:
+            reader.join(timeout=10)
+        proc.stdout.close()
+        proc.stderr.close()
         outcome = Outcome(
             list(argv),
             code,
-            stdout.decode(errors="replace"),
+            b"".join(out_chunks).decode(errors="replace"),
             b"".join(err_chunks).decode(errors="replace"),
             time.perf_counter() - t0,
             "",
