@@ -57,7 +57,7 @@ class _Forces:
         # the quaternion formulation.
         body = scene.model
         prec = scene.integrator.precision
-        pars = ParTable()
+        pars = ParTable(prec)
         inertia = [pars.add(name, body.inertia[i]) for i, name in enumerate("ABC")]
         quat = list(hy.make_vars("qw", "qx", "qy", "qz"))
         rates = list(hy.make_vars("p", "q", "r"))
