@@ -42,6 +42,8 @@ _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
 #: validation (10⁸ steps, validation/bench_conservation.py), minutes in double. A run that
 #: spends it stops cleanly with its results; the budget exists so that nothing runs forever.
 DEFAULT_MAX_STEPS = 10**9
+#: The smallest tolerance accepted, as a fraction of the precision's epsilon.
+TOLERANCE_FLOOR = Fraction(1, 10**6)
 #: Output times at most (10⁷ rows of a 20-number model are 1.6 GB in double); the engine also
 #: bounds the recorded rows' estimated memory (:data:`cayley_heyoka.engine.MAX_RECORD_BYTES`).
 MAX_OUTPUT_TIMES = 10**7
@@ -122,20 +124,25 @@ class IntegratorOptions:
         precision = Precision.from_spec(table.get("precision", "double"))
         tol = table.get("tolerance", "auto")
         tolerance = None if tol == "auto" else number(tol, "integrator.tolerance", positive=True)
-        # heyoka's order grows like -log(tol): below epsilon it buys no accuracy, only a longer
-        # compilation (1e-310 in double compiled for 14 minutes and 3 GB before it was killed).
-        # (Relative slack 2^-20: epsilon's shortest decimal text may fall just below it.)
-        epsilon = Fraction(2) ** (1 - precision.bits) * (1 - Fraction(1, 2**20))
+        # heyoka's order grows like -log(tol)/2. A tolerance somewhat below epsilon can pay
+        # where the state is small next to its scale (Encke's deviation at 1e-18 in double:
+        # 600x less position error, validation/BENCHMARKS.md, "IAS15"), but past
+        # TOLERANCE_FLOOR x epsilon only the compilation grows (1e-310 in double compiled for
+        # 14 minutes and 3 GB before it was killed). (Relative slack 2^-20: epsilon's
+        # shortest decimal text may fall just below it.)
+        floor = (
+            Fraction(2) ** (1 - precision.bits) * TOLERANCE_FLOOR * (1 - Fraction(1, 2**20))
+        )
         if tolerance is not None and exact_fraction(tolerance) >= 1:
             raise SceneError(
                 "integrator.tolerance", f"must be < 1 (it is a relative error), got {tolerance}"
             )
-        if tolerance is not None and exact_fraction(tolerance) < epsilon:
+        if tolerance is not None and exact_fraction(tolerance) < floor:
             raise SceneError(
                 "integrator.tolerance",
-                f"must be >= the epsilon of {precision.name}, 2^{1 - precision.bits} = "
-                f"{precision.epsilon!r} (a smaller one buys no accuracy), got {tolerance}; "
-                "raise the precision instead",
+                f"must be >= 1e-6 x the epsilon of {precision.name} (2^{1 - precision.bits} = "
+                f"{precision.epsilon!r}), got {tolerance}: below that heyoka's order grows "
+                "with nothing to gain; raise the precision instead",
             )
         compact = table.get("compact_mode", "auto")
         if compact not in ("auto", True, False):

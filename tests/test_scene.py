@@ -141,15 +141,17 @@ def test_decimal_text_is_kept_from_toml():
     ("prec", "tol", "ok"),
     [
         ("double", "2.220446049250313e-16", True),  # epsilon's shortest text
-        ("double", "2.2e-16", False),
+        ("double", "1e-18", True),  # below epsilon: measured to pay for Encke's formulation
+        ("double", "2.220446049250313e-22", True),  # the floor, 1e-6 epsilon
+        ("double", "2.2e-22", False),
         ("double", "1e-310", False),
-        ("quad", "1e-33", True),
-        ("quad", "1e-35", False),
-        ({"bits": 256}, "1e-76", True),
-        ({"bits": 256}, "1e-78", False),
+        ("quad", "1e-39", True),
+        ("quad", "1e-41", False),
+        ({"bits": 256}, "1e-82", True),
+        ({"bits": 256}, "1e-84", False),
     ],
 )
-def test_tolerance_not_below_epsilon(prec, tol, ok):
+def test_tolerance_not_far_below_epsilon(prec, tol, ok):
     data = free_body(integrator={"precision": prec, "tolerance": tol})
     if ok:
         Scene.from_dict(data)
