@@ -130,9 +130,7 @@ class IntegratorOptions:
         # TOLERANCE_FLOOR x epsilon only the compilation grows (1e-310 in double compiled for
         # 14 minutes and 3 GB before it was killed). (Relative slack 2^-20: epsilon's
         # shortest decimal text may fall just below it.)
-        floor = (
-            Fraction(2) ** (1 - precision.bits) * TOLERANCE_FLOOR * (1 - Fraction(1, 2**20))
-        )
+        floor = Fraction(2) ** (1 - precision.bits) * TOLERANCE_FLOOR * (1 - Fraction(1, 2**20))
         if tolerance is not None and exact_fraction(tolerance) >= 1:
             raise SceneError(
                 "integrator.tolerance", f"must be < 1 (it is a relative error), got {tolerance}"
