@@ -27,6 +27,8 @@ _EXPORTS = {
     "IntegrationError": "errors",
     "Interrupted": "errors",
     "SceneError": "errors",
+    "OutputError": "files",
+    "ResultFileError": "files",
     "Precision": "precision",
     "EventLog": "result",
     "Result": "result",
@@ -38,6 +40,7 @@ if TYPE_CHECKING:
     from .engine import clear_cache, compile_model, run
     from .ensemble import EnsembleError, EnsembleResult, propagate_ensemble
     from .errors import IntegrationError, Interrupted, SceneError
+    from .files import OutputError, ResultFileError
     from .precision import Precision
     from .result import EventLog, Result
     from .scene import Scene, load_scene
@@ -75,8 +78,10 @@ __all__ = [
     "EventLog",
     "IntegrationError",
     "Interrupted",
+    "OutputError",
     "Precision",
     "Result",
+    "ResultFileError",
     "Scene",
     "SceneError",
     "clear_cache",

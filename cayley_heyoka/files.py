@@ -21,6 +21,7 @@ policy (docs/scenes.md, "Files"):
 from __future__ import annotations
 
 import contextlib
+import errno
 import glob
 import hashlib
 import json
@@ -82,7 +83,12 @@ class OutputError(ValueError):
     @classmethod
     def failed_write(cls, path: str | Path, exc: OSError) -> OutputError:
         """A write to ``path`` that failed with ``exc`` and left the previous file as it was."""
-        return cls(path, f"could not be written ({exc.strerror or exc}); nothing changed")
+        return WriteFailed(path, f"could not be written ({exc.strerror or exc}); nothing changed")
+
+
+class WriteFailed(OutputError):
+    """An :class:`OutputError` raised by the write itself (a full disk, a vanished directory),
+    after the work it was to save: a command reports it as a stop (exit 1), not a refusal."""
 
 
 # ---------------------------------------------------------------------- destinations
@@ -114,6 +120,12 @@ def check_destination(path: str | Path, kind: str, *, overwrite: bool = False) -
 
 
 def _check_destination(given: Path, kind: str, overwrite: bool) -> None:
+    if given.is_symlink():
+        try:
+            os.stat(given)
+        except OSError as exc:  # realpath would quietly cut a loop and write over the link
+            if exc.errno == errno.ELOOP:
+                raise OutputError(given, "is a loop of symbolic links") from None
     target = Path(os.path.realpath(given))
     parent = target.parent
     # The temporary's name is the longest this write needs.

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
-from .files import OutputError, check_destination, write_hdf5
+from .files import OutputError, WriteFailed, check_destination, write_hdf5
 from .precision import Precision
 from .scene import Scene, load_scene
 
@@ -667,6 +667,13 @@ def _main(args: argparse.Namespace) -> int:
     except SceneError as exc:  # found when the model is built or its output times rounded
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
+    except WriteFailed as exc:
+        print(
+            f"error: {exc}; the checkpoints are kept in {args.out}.work: run the same command "
+            "to continue from them",
+            file=sys.stderr,
+        )
+        return 1
     except (ValueError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2 if isinstance(exc, ValueError) else 1

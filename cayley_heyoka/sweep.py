@@ -447,10 +447,14 @@ def _ensemble_group(
         complete = outcome == hy.taylor_outcome.time_limit and reached == len(grid)
         if complete:
             part.status[row], part.message[row] = OK, "every output time was reached"
-        elif outcome == hy.taylor_outcome.err_nf_state:
-            part.message[row] = f"the state became non-finite after t = {ta.time}"
         else:
-            part.message[row] = f"stopped at t = {ta.time} with outcome {outcome}"
+            # heyoka's time is NaN once the state is: name the last output time kept instead.
+            kept = f"t = {grid[reached - 1]}" if reached else "the start"
+            why = {
+                hy.taylor_outcome.err_nf_state: "the state became non-finite",
+                hy.taylor_outcome.step_limit: "the step budget integrator.max_steps was spent",
+            }.get(outcome, f"stopped with outcome {outcome}")
+            part.message[row] = f"{why} after {kept} (the last output time kept)"
         part.steps[row] = nsteps
         logs = engine.event_logs(model, ta, prec, None)
         for name in layout.events:

@@ -273,3 +273,30 @@ def test_failed_run_is_reported_not_certified(tmp_path, capsys):
     assert not partial.success and 6 <= len(partial.t) < 21
     cert = read_certificate(tmp_path / "r.h5")
     assert not cert["certified"] and cert["digits_certified"] == -np.inf
+
+
+def test_a_full_disk_at_the_end_keeps_the_checkpoints_and_the_rerun_writes(
+    tmp_path, capsys, monkeypatch
+):
+    import errno
+
+    from cayley_heyoka import reference_run
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(FREE_BODY.format(stop="2.0", count=3))
+    out = tmp_path / "r.h5"
+    argv = ["reference", str(scene), "--digits", "12", "--out", str(out), "--no-progress"]
+    real = reference_run.write_hdf5
+
+    def full_disk(path, fill):
+        raise ch.OutputError.failed_write(path, OSError(errno.ENOSPC, os.strerror(errno.ENOSPC)))
+
+    monkeypatch.setattr(reference_run, "write_hdf5", full_disk)
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "No space left on device" in err and "checkpoints are kept" in err
+    assert not out.exists() and any((tmp_path / "r.h5.work").iterdir())
+    monkeypatch.setattr(reference_run, "write_hdf5", real)
+    assert main(argv) == 0
+    assert read_certificate(out)["certified"]
+    assert not (tmp_path / "r.h5.work").exists()

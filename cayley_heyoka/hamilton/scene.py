@@ -102,14 +102,14 @@ class Hamiltonian:
             raise SceneError(
                 "hamiltonian.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
             )
-        if table.get("model") == "predominant_mass":
+        model = table.get("model")
+        if model is not None and model not in MODELS:
+            raise SceneError("hamiltonian.model", f"must be one of {MODELS}, got {model!r}")
+        if model == "predominant_mass":
             return cls._predominant_mass(tables, formulation)
         extra = [k for k in _PLANET_KEYS if k in table]
         if extra:
             raise SceneError(f"hamiltonian.{extra[0]}", "belongs to model = 'predominant_mass'")
-        model = table.get("model")
-        if model is not None and model not in MODELS:
-            raise SceneError("hamiltonian.model", f"must be one of {MODELS}, got {model!r}")
         eta, varpi = _initial(tables, 3 if "model" in table else None)
         if model is not None:
             for key in ("H2", "flow"):
