@@ -1,0 +1,79 @@
+"""What watching for Ctrl-C costs a run: the same scenes run watched and unwatched, side by side.
+
+In the main thread the engine gives heyoka a callback after each step, so that SIGINT or SIGTERM
+stops the run at a step's end with its results (``cayley_heyoka.engine``, "signals"); in any
+other thread it does not (no Python signal can reach it there). This script runs each bundled
+scene to a longer end time both ways, interleaved, and prints the ratio of the least disturbed
+wall times. It judges nothing: it measures.
+
+    python validation/interrupt_cost.py [--repeat 5] [--stop 2000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import threading
+import time
+from pathlib import Path
+
+import cayley_heyoka as ch
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+SCENES = {
+    "free body, quaternion (double)": (
+        "free_body.toml",
+        {"attitude": {"formulation": "quaternion"}},
+    ),
+    "free body, Rodrigues (double)": ("free_body.toml", {}),
+    "heavy top (double)": ("heavy_top.toml", {}),
+    "free body (quad)": ("free_body_quad.toml", {}),
+    "J2 + third body orbit (double)": ("orbit_j2_third_body.toml", {}),
+}
+
+
+def scene_for(name: str, stop: float, extra: dict) -> ch.Scene:
+    data = ch.load_scene(EXAMPLES / name).to_dict()
+    for table, values in extra.items():
+        data.setdefault(table, {}).update(values)
+    data["output"] = {"times": {"start": 0, "stop": stop, "count": 11}}
+    data.pop("events", None)
+    return ch.Scene.from_dict(data)
+
+
+def timed(scene: ch.Scene) -> float:
+    t0 = time.perf_counter()
+    ch.run(scene)
+    return time.perf_counter() - t0
+
+
+def in_thread(scene: ch.Scene) -> float:
+    box: list[float] = []
+    worker = threading.Thread(target=lambda: box.append(timed(scene)))
+    worker.start()
+    worker.join()
+    return box[0]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--stop", type=float, default=2000.0, help="end time of the double runs")
+    args = parser.parse_args()
+    print(f"| scene | steps | unwatched (s) | watched (s) | watched ÷ unwatched |")
+    print("|---|---|---|---|---|")
+    for label, (name, extra) in SCENES.items():
+        stop = args.stop / 20 if "quad" in label else args.stop
+        scene = scene_for(name, stop, copy.deepcopy(extra))
+        steps = ch.run(scene).counters["steps"]  # compiles once; both ways share the code
+        watched, unwatched = [], []
+        for _ in range(args.repeat):
+            unwatched.append(in_thread(scene))
+            watched.append(timed(scene))
+        a, b = min(unwatched), min(watched)
+        print(f"| {label} | {steps} | {a:.3f} | {b:.3f} | {b / a:.3f} |")
+
+
+if __name__ == "__main__":
+    main()
