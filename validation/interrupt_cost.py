@@ -61,7 +61,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--stop", type=float, default=2000.0, help="end time of the double runs")
     args = parser.parse_args()
-    print(f"| scene | steps | unwatched (s) | watched (s) | watched ÷ unwatched |")
+    print("| scene | steps | unwatched (s) | watched (s) | watched ÷ unwatched |")
     print("|---|---|---|---|---|")
     for label, (name, extra) in SCENES.items():
         stop = args.stop / 20 if "quad" in label else args.stop
