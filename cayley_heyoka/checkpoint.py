@@ -40,6 +40,20 @@ FORMAT = "cayley_heyoka.checkpoint"
 SEGMENT = re.compile(r"segment-\d{6,}\.npz")
 
 
+#: Most stretches a run may be cut into: each writes a file, and each boundary ends a step.
+MAX_STRETCHES = 10_000
+
+
+def check_count(count: Any) -> int:
+    """``count`` if it is a number of stretches in 1 … :data:`MAX_STRETCHES`, else ValueError."""
+    if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_STRETCHES:
+        raise ValueError(
+            f"checkpoints (stretches of a run) must be an integer in 1 … {MAX_STRETCHES}, "
+            f"got {count!r}"
+        )
+    return count
+
+
 class CheckpointMismatch(ValueError):
     """The work directory holds a different run than the one asked for."""
 
@@ -64,11 +78,9 @@ class CheckpointedRun:
     def __init__(
         self, scene: Scene, workdir: str | Path, count: int, progress: Progress | None = None
     ) -> None:
-        if isinstance(count, bool) or not isinstance(count, int) or count < 1:
-            raise ValueError(f"count (stretches between checkpoints) must be >= 1, got {count!r}")
         self.scene = scene
         self.workdir = Path(workdir)
-        self.count = count
+        self.count = check_count(count)
         self.progress = progress
         self.precision = scene.integrator.precision
 

@@ -145,7 +145,7 @@ class CheckOptions:
     def text(self, key: str) -> str | None:
         return self.values.get(key)
 
-    def integer(self, key: str, minimum: int = 1) -> int | None:
+    def integer(self, key: str, minimum: int = 1, maximum: int = 10**6) -> int | None:
         value = self.values.get(key)
         if value is None:
             return None
@@ -153,8 +153,10 @@ class CheckOptions:
             number = int(value)
         except ValueError:
             number = minimum - 1
-        if number < minimum:
-            raise SceneError(f"--set {key}", f"must be an integer >= {minimum}, got {value!r}")
+        if not minimum <= number <= maximum:
+            raise SceneError(
+                f"--set {key}", f"must be an integer in {minimum} … {maximum}, got {value!r}"
+            )
         return number
 
     def choice(self, key: str, choices: tuple[str, ...]) -> str | None:

@@ -160,6 +160,8 @@ def _check_destination(given: Path, kind: str, overwrite: bool) -> None:
 def identify(path: str | Path) -> str | None:
     """Which kind of our files ``path`` is (``"result"``, ... ``"plot"``), or None."""
     path = Path(path)
+    if not path.is_file():  # opening a FIFO would wait for a writer; a device may never end
+        return None
     try:
         with open(path, "rb") as f:
             head = f.read(8)
@@ -325,6 +327,8 @@ def open_ours(path: str | Path, kind: str) -> Iterator[Any]:
         raise ResultFileError(path, "no such file")
     if path.is_dir():
         raise ResultFileError(path, "is a directory, not a file")
+    if not path.is_file():
+        raise ResultFileError(path, "is not a regular file (a pipe, socket or device)")
     try:
         f = h5py.File(path, "r")
     except (OSError, RuntimeError, ValueError) as exc:

@@ -549,7 +549,7 @@ def _file_format(path: Path) -> str:
     import h5py
 
     if not path.is_file():
-        raise PlotError("no such file")
+        raise PlotError("no such file" if not path.exists() else "is not a regular file")
     try:
         with h5py.File(path, "r") as f:
             fmt = f.attrs.get("format")

@@ -196,8 +196,11 @@ def generate_reference(
         raise ValueError(f"digits must be an integer >= 1, got {digits!r}")
     if max_bits < 53:
         raise ValueError(f"max_bits must be >= 53, got {max_bits}")
-    if tolerance is not None and not float(tolerance) > 0:
-        raise ValueError(f"tolerance must be > 0, got {tolerance}")
+    if tolerance is not None and not _positive(tolerance):
+        raise ValueError(f"tolerance must be a number > 0, got {tolerance!r}")
+    from .checkpoint import check_count
+
+    check_count(stretches)
     out = Path(out)
     workdir = Path(workdir) if workdir is not None else out.with_name(out.name + ".work")
     say = report or (lambda text: None)
@@ -487,6 +490,13 @@ class _Projectile(_ClosedForm):
 
 
 # ---------------------------------------------------------------------- files
+def _positive(text: str) -> bool:
+    try:
+        return float(text) > 0
+    except (TypeError, ValueError):
+        return False
+
+
 def _with_precision(scene: Scene, prec: Precision, tolerance: str | None) -> Scene:
     data = scene.to_dict()
     integ = dict(data.get("integrator", {}))

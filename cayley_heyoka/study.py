@@ -47,6 +47,10 @@ DISTRIBUTIONS = ("uniform", "normal")
 #: large enough that a task's overhead (building the members' models, a round trip to the
 #: scheduler) stays small beside its propagation.
 DEFAULT_CHUNK = 256
+#: Members a study may have (a grid's product of counts, a random ensemble's count): ten
+#: times the largest ensemble we validate with, and refused before any value is drawn
+#: (10¹² members once took all memory, or a minute, just to list them).
+MAX_MEMBERS = 10**6
 
 _SEGMENT = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)")
 
@@ -178,7 +182,7 @@ class Study:
             for key in ("count", "seed"):
                 if key not in sweep:
                     raise SceneError(f"sweep.{key}", "is required for kind = 'random'")
-            count = _count(sweep["count"], "sweep.count")
+            count = _count(sweep["count"], "sweep.count", MAX_MEMBERS)
             seed = sweep["seed"]
             if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
                 raise SceneError("sweep.seed", f"must be an integer >= 0, got {seed!r}")
@@ -193,6 +197,11 @@ class Study:
         parameters = tuple(
             _parameter(name, spec, kind, scene, precision) for name, spec in table.items()
         )
+        if kind == "grid" and (size := math.prod(len(p.values) for p in parameters)) > MAX_MEMBERS:
+            raise SceneError(
+                "sweep.parameters",
+                f"a grid of {size} members (the product of the counts), more than {MAX_MEMBERS}",
+            )
         run = RunOptions.parse(data.get("run", {}))
         source = {"title": title, "scene": scene, "scene_file": scene_file, "sweep": sweep}
         return cls(title, scene, scene_file, kind, parameters, count, seed, run, _plain(source))
@@ -269,11 +278,13 @@ def load_study(path: str | Path) -> Study:
 
 
 # ---------------------------------------------------------------------- internals: parsing
-def _count(value: Any, where: str) -> int | None:
+def _count(value: Any, where: str, most: int | None = None) -> int | None:
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise SceneError(where, f"must be an integer >= 1, got {value!r}")
+    if most is not None and value > most:
+        raise SceneError(where, f"must be at most {most} (members of a study), got {value}")
     return value
 
 
@@ -356,7 +367,7 @@ def _grid_values(spec: Mapping[str, Any], where: str, prec: Precision) -> tuple[
         raise SceneError(where, f"a grid needs start, stop and count; missing {missing}")
     start = number(spec["start"], f"{where}.start")
     stop = number(spec["stop"], f"{where}.stop")
-    count = _count(spec["count"], f"{where}.count")
+    count = _count(spec["count"], f"{where}.count", MAX_MEMBERS)
     spacing = spec.get("spacing", "linear")
     if spacing not in ("linear", "log"):
         raise SceneError(f"{where}.spacing", f"must be 'linear' or 'log', got {spacing!r}")

@@ -100,10 +100,11 @@ def test_work_directory_of_another_run_is_refused(tmp_path):
     assert manifest["stretches"] == 4 and manifest["versions"]["heyoka"]
 
 
-def test_stretch_count_must_be_positive(tmp_path):
+@pytest.mark.parametrize("count", [0, 10_001, 10**9, 2.0, True])
+def test_stretch_count_must_be_in_bounds(tmp_path, count):
     sc = ch.load_scene(EXAMPLES / "projectile.toml")
-    with pytest.raises(ValueError, match="count .* must be >= 1, got 0"):
-        CheckpointedRun(sc, tmp_path, 0)
+    with pytest.raises(ValueError, match=r"checkpoints .* must be an integer in 1 … 10000"):
+        CheckpointedRun(sc, tmp_path, count)
 
 
 def test_run_that_fails_midway_returns_what_it_computed(tmp_path):

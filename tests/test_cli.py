@@ -143,7 +143,7 @@ def test_check_fails_with_exit_1_when_S_is_wrong(tmp_path, capsys, monkeypatch):
     [
         ("upsilon0", "--set: expected KEY=VALUE"),
         ("twin=cayley", "--set twin: unknown option"),
-        ("times=1", "--set times: must be an integer >= 2"),
+        ("times=1", "--set times: must be an integer in 2 … 1000000"),
     ],
 )
 def test_check_refuses_a_bad_option_naming_it(capsys, setting, message):

@@ -63,9 +63,11 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
     try:
         return check_element_equations(
             scene,
-            samples=options.integer("samples"),
+            # Each sample is a quadrature in mpmath (1000 take ~30 s); the nodes' default is
+            # at most 308 (1024 bits).
+            samples=options.integer("samples", maximum=10**4),
             upsilon0=options.text("upsilon0"),
-            nodes=options.integer("nodes"),
+            nodes=options.integer("nodes", maximum=400),
         )
     except ValueError as exc:  # SceneError included: e.g. a force function of t
         chosen = method or any(options.text(k) is not None for k in element_keys)
