@@ -20,6 +20,7 @@ import contextlib
 import copy
 import hashlib
 import math
+import re
 import signal
 import threading
 import time
@@ -88,11 +89,22 @@ def cache_size() -> int:
     return len(_CACHE)
 
 
+#: heyoka's name of the time in an expression's text (no state variable is named t).
+_TIME = re.compile(r"\bt\b")
+
+
 def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, bool]:
     """The compiled integrator for ``model``, from the cache when possible.
 
     Returns the compiled object and whether it came from the cache.
     """
+    for e in model.events:
+        if not hy.get_variables(e.expression) and not _TIME.search(str(e.expression)):
+            # heyoka refuses such an event function ("cannot be constants or parameters").
+            raise SceneError(
+                f"events.{e.name}.expression",
+                f"is constant ({e.expression}): an event needs the state or t to cross zero",
+            )
     key = cache_key(model, options)
     hit = _CACHE.get(key)
     if hit is not None:
@@ -484,6 +496,17 @@ class Propagation:
             pars = np.concatenate(self._pars_rows) if self._pars_rows else np.empty((0, width[1]))
         times = self.grid[: len(states)]
         values = evaluate_outputs(self.compiled, model, states, pars, times, prec)
+        if self.status == 0 and (bad := _first_nonfinite_row(values)) is not None:
+            # A finite state can still give an infinite output (V = "1/(t - 1)" at t = 1): the
+            # run stops at the last row whose every output is finite, as for the state.
+            k, name = bad
+            kind = "monitor" if name in model.monitors else "output"
+            self.status = -1
+            self.message = (
+                f"the {kind} {name} became non-finite at t = {times[k]}; results kept up to there"
+            )
+            times = times[:k]
+            values = {n: v[:k] for n, v in values.items()}
         return Result(
             t=times,
             variables={k: values[k] for k in model.outputs},
@@ -631,6 +654,17 @@ def _require_finite(values: np.ndarray, names: list[str], what: str) -> None:
         raise SceneError(
             names[i], f"the {what} is {values[i]} at the start: it must be finite to integrate"
         )
+
+
+def _first_nonfinite_row(values: dict[str, np.ndarray]) -> tuple[int, str] | None:
+    """The first row at which some output is not finite, and that output's name."""
+    first = None
+    for name, value in values.items():
+        rows = np.asarray(value).reshape(len(value), -1)
+        bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
+        if len(bad) and (first is None or bad[0] < first[0]):
+            first = (int(bad[0]), name)
+    return first
 
 
 def _direction(d: int) -> Any:

@@ -23,6 +23,7 @@ rounded to double on the way in), so a quadruple-precision run sees ``0.1`` exac
 
 from __future__ import annotations
 
+import collections
 import difflib
 import tomllib
 from collections.abc import Iterable, Mapping
@@ -42,6 +43,9 @@ _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
 #: validation (10⁸ steps, validation/bench_conservation.py), minutes in double. A run that
 #: spends it stops cleanly with its results; the budget exists so that nothing runs forever.
 DEFAULT_MAX_STEPS = 10**9
+#: The largest step budget: heyoka counts steps in 64 bits (10³⁰ was a TypeError from its
+#: binding), and 10¹⁸ steps are centuries of computing anyway.
+MAX_MAX_STEPS = 10**18
 #: The smallest tolerance accepted, as a fraction of the precision's epsilon.
 TOLERANCE_FLOOR = Fraction(1, 10**6)
 #: Output times at most (10⁷ rows of a 20-number model are 1.6 GB in double); the engine also
@@ -153,9 +157,14 @@ class IntegratorOptions:
         step = table.get("max_step", "none")
         max_step = None if step == "none" else number(step, "integrator.max_step", positive=True)
         budget = table.get("max_steps", DEFAULT_MAX_STEPS)
-        if isinstance(budget, bool) or not isinstance(budget, int) or budget < 1:
+        if (
+            isinstance(budget, bool)
+            or not isinstance(budget, int)
+            or not 1 <= budget <= MAX_MAX_STEPS
+        ):
             raise SceneError(
-                "integrator.max_steps", f"must be an integer >= 1 (a step budget), got {budget!r}"
+                "integrator.max_steps",
+                f"must be an integer in 1 … 10^18 (a step budget), got {budget!r}",
             )
         compact_mode = None if compact == "auto" else compact
         return cls(precision, tolerance, compact_mode, high, max_step, budget)
@@ -187,6 +196,9 @@ class OutputOptions:
             not isinstance(monitors, list) or not all(isinstance(m, str) for m in monitors)
         ):
             raise SceneError("output.monitors", f"must be a list of names, got {monitors!r}")
+        for where, names in (("output.events", events), ("output.monitors", monitors or [])):
+            if twice := sorted(n for n, k in collections.Counter(names).items() if k > 1):
+                raise SceneError(where, f"names {', '.join(map(repr, twice))} more than once")
         options = {k: table[k] for k in family_keys if k in table}
         return cls(
             times, grid, tuple(events), None if monitors is None else tuple(monitors), options
@@ -376,6 +388,11 @@ def read_toml(path: str | Path, what: str = "scene") -> dict[str, Any]:
     try:
         if path.is_dir():
             raise SceneError(what, f"{str(path)!r} is a directory, not a TOML file")
+        if path.exists() and not path.is_file():
+            # Reading a FIFO waits for a writer, /dev/zero never ends: neither is a scene.
+            raise SceneError(
+                what, f"{str(path)!r} is not a regular file (a pipe, socket or device)"
+            )
         size = path.stat().st_size
         if size > MAX_SCENE_BYTES:
             raise SceneError(what, f"{str(path)!r} has {size} bytes, more than {MAX_SCENE_BYTES}")
