@@ -412,8 +412,10 @@ class Propagation:
                 continue
             self.status = -1
             if outcome == hy.taylor_outcome.err_nf_state:
+                # heyoka's time may itself be NaN then: name the last output time kept instead.
+                when = ta.time if math.isfinite(float(ta.time)) else grid[max(self.done - 1, 0)]
                 self.message = (
-                    f"the state became non-finite after t = {ta.time}; results kept up to there"
+                    f"the state became non-finite after t = {when}; results kept up to there"
                 )
             elif outcome == hy.taylor_outcome.cb_stop:
                 self.message = f"stopped by the progress callback at t = {ta.time}"

@@ -202,3 +202,15 @@ def test_python_api_raises_scene_error(change):
         data[table][key] = value
     with pytest.raises(SceneError):
         ch.run(ch.Scene.from_dict(data))
+
+
+@pytest.mark.parametrize("precision", ["double", "quad"])
+def test_state_that_overflows_in_the_first_step_names_a_time(hostile, tmp_path, precision):
+    """heyoka's own time is NaN after such a step: the stop names the last output time kept."""
+    data = small("orbit_j2_third_body")
+    data["orbit"]["mu"] = Raw("1e300")
+    data["integrator"] = {"precision": precision}
+    out = tmp_path / "r.h5"
+    o = hostile.run(["run", str(hostile.scene(data)), "--out", str(out)], expect="stopped", out=out)
+    assert "the state became non-finite after t = 0" in o.error_line
+    assert "nan" not in o.error_line
