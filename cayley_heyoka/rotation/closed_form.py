@@ -45,6 +45,8 @@ from .attitude import (
 __all__ = ["Crossing", "FreeBodyState", "FreeRigidBody", "free_rigid_body"]
 
 AXES = ("x1", "y1", "z1")
+#: The most invariable-plane crossings one call of ``crossing_times`` lists (each certified).
+MAX_CROSSINGS = 10**6
 _SINGULAR_FIELDS = ("nu0", "lambda0", "mu0")
 
 
@@ -360,6 +362,7 @@ class _Constants:
             shift = 0 if index == self.iX else 1
             first = int(mpmath.floor((lo / self.K - shift) / 2)) - 1
             last = int(mpmath.ceil((hi / self.K - shift) / 2)) + 1
+            _check_crossing_count(last - first, t0, t1)
             if index == self.iX:
                 return [(j, (-1) ** (j % 2)) for j in range(first, last + 1)]
             return [(j, -self.sY * (-1) ** (j % 2)) for j in range(first, last + 1)]
@@ -369,6 +372,7 @@ class _Constants:
         # ρ cos θ vanishes at θ = π/2 + jπ, with d/dt = −ρω sin θ.
         first = int(mpmath.floor((theta0 - mpmath.pi / 2) / mpmath.pi)) - 1
         last = int(mpmath.ceil((theta1 - mpmath.pi / 2) / mpmath.pi)) + 1
+        _check_crossing_count(last - first, t0, t1)
         sign = 1 if self.omega_pair > 0 else -1
         return [(j, -sign * (-1) ** (j % 2)) for j in range(first, last + 1)]
 
@@ -555,6 +559,15 @@ class _Constants:
             return (h + k * r) / kc * C * mpmath.sqrt(A * B) * 2 * abs(delta) * scale / root
 
         return self._quad(integrand, [0, half], wdps) if delta else mpmath.mpf(0)
+
+
+def _check_crossing_count(count: int, t0: mpmath.mpf, t1: mpmath.mpf) -> None:
+    if count > MAX_CROSSINGS:
+        raise ValueError(
+            f"t_stop: [{mpmath.nstr(t0, 6)}, {mpmath.nstr(t1, 6)}] holds about "
+            f"{mpmath.nstr(mpmath.mpf(count), 3)} crossings, more than {MAX_CROSSINGS}; ask for "
+            "shorter windows"
+        )
 
 
 def _pi_circular(n: mpmath.mpf, chi: mpmath.mpf) -> mpmath.mpf:

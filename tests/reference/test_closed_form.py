@@ -279,6 +279,16 @@ def test_space_momentum_is_constant():
             assert abs(sum(R[i][j] * L[j] for j in range(3)) - b.momentum_space[i]) < 1e-30
 
 
+@pytest.mark.parametrize(
+    ("inertia", "t_stop"), [(("1", "2", "3"), "1e300"), (("1", "1", "1.5"), "1e400")]
+)
+def test_crossing_window_too_long_is_refused_before_listing(inertia, t_stop):
+    """10^300 time units hold ~10^299 crossings: listing them never ended."""
+    b = FreeRigidBody(inertia, ("0.25", "-0.15", "1.2"))
+    with pytest.raises(ValueError, match=r"t_stop: .* crossings, more than 1000000"):
+        b.crossing_times("y1", 0, t_stop)
+
+
 @pytest.mark.parametrize("name", ["1", "4", "6"])
 def test_crossing_times(name):
     case = CASES[name]
@@ -349,7 +359,11 @@ def test_many_periods_add_whole_increments():
         (dict(inertia=("1", "2", "3"), rates=("1", "x", "1")), r"rates\[1\]: 'x' is not a number"),
         (
             dict(inertia=("1", "2", "3"), rates=("1", "1", "1"), dps=3),
-            "dps must be an integer >= 5",
+            "dps must be an integer in 5 … 1000",
+        ),
+        (
+            dict(inertia=("1", "2", "3"), rates=("1", "1", "1"), dps=10**4),
+            "dps must be an integer in 5 … 1000",
         ),
         (
             dict(inertia=("1", "2", "3"), rates=("1", "1", "1"), attitude=("1", "0", "0", "0.1")),
