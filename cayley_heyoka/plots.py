@@ -213,6 +213,11 @@ def drift(
             ax.plot(*_loggable(t, line), color=colour, lw=1.6, label=f"{name}: median of {len(d)}")
         first_decade = positive & (t <= 10 * t_first) & (line > 0)
         early.append(line[first_decade])
+    if not any(len(line.get_xdata()) for line in ax.get_lines()):
+        # matplotlib's own refusal ("Data cannot be log-scaled") would come at savefig.
+        raise PlotError(
+            "series: nothing to draw on log axes (every drift is exactly 0, or no time is > 0)"
+        )
     _reference_slopes(ax, t[positive], np.concatenate(early))
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -518,6 +523,13 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
         raise ImportError(_INSTALL) from exc
     # A bare Figure, not pyplot: nothing is shown and no pyplot state is left behind.
     fig = Figure(figsize=_SIZES[kind], layout="constrained")
+    fmt_out = out.suffix[1:].lower() or "png"
+    formats = fig.canvas.get_supported_filetypes()
+    if fmt_out not in formats:
+        raise PlotError(
+            f"out: {out.name} asks for format {fmt_out!r} (its suffix); give one of "
+            f"{', '.join(sorted(formats))}"
+        )
     if fmt == "cayley_heyoka.sweep":
         if kind != "drift":
             raise PlotError(
@@ -538,7 +550,6 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
             crossings(result, ax=fig.add_subplot())
     from .files import PNG_SOFTWARE, write_atomically
 
-    fmt_out = out.suffix[1:].lower() or "png"
     # The Software tag is how a later `plot` recognises a PNG it may replace.
     tag = {"metadata": {"Software": f"{PNG_SOFTWARE} plot"}} if fmt_out == "png" else {}
     write_atomically(out, lambda tmp: fig.savefig(tmp, dpi=110, format=fmt_out, **tag))

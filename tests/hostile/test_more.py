@@ -214,3 +214,28 @@ def test_state_that_overflows_in_the_first_step_names_a_time(hostile, tmp_path, 
     o = hostile.run(["run", str(hostile.scene(data)), "--out", str(out)], expect="stopped", out=out)
     assert "the state became non-finite after t = 0" in o.error_line
     assert "nan" not in o.error_line
+
+
+@pytest.fixture
+def projectile_result(hostile, tmp_path) -> Path:
+    """The projectile at two output times: its energy drift is exactly 0 at the second."""
+    out = tmp_path / "projectile.h5"
+    hostile.run(["run", str(EXAMPLES / "projectile.toml"), "--out", str(out)], expect="done")
+    return out
+
+
+@pytest.mark.parametrize(
+    ("kind", "name", "words"),
+    [
+        ("drift", "p.png", "series: nothing to draw on log axes"),
+        ("drift", "p.weird", "out: p.weird asks for format 'weird'"),
+        ("orbit", "p.png", "kind 'orbit' needs the position"),
+    ],
+)
+def test_plot_that_cannot_be_drawn_is_refused(
+    hostile, projectile_result, tmp_path, kind, name, words
+):
+    out = tmp_path / name
+    argv = ["plot", str(projectile_result), "--kind", kind, "--out", str(out)]
+    hostile.run(argv, expect="refused", field=words)
+    assert not out.exists()
