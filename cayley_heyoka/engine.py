@@ -498,15 +498,11 @@ class Propagation:
             pars = np.concatenate(self._pars_rows) if self._pars_rows else np.empty((0, width[1]))
         times = self.grid[: len(states)]
         values = evaluate_outputs(self.compiled, model, states, pars, times, prec)
-        if self.status == 0 and (bad := _first_nonfinite_row(values)) is not None:
+        if self.status == 0 and (bad := first_nonfinite(model, values, times)) is not None:
             # A finite state can still give an infinite output (V = "1/(t - 1)" at t = 1): the
             # run stops at the last row whose every output is finite, as for the state.
-            k, name = bad
-            kind = "monitor" if name in model.monitors else "output"
+            k, self.message = bad
             self.status = -1
-            self.message = (
-                f"the {kind} {name} became non-finite at t = {times[k]}; results kept up to there"
-            )
             times = times[:k]
             values = {n: v[:k] for n, v in values.items()}
         return Result(
@@ -658,15 +654,22 @@ def _require_finite(values: np.ndarray, names: list[str], what: str) -> None:
         )
 
 
-def _first_nonfinite_row(values: dict[str, np.ndarray]) -> tuple[int, str] | None:
-    """The first row at which some output is not finite, and that output's name."""
+def first_nonfinite(
+    model: Model, values: dict[str, np.ndarray], times: np.ndarray
+) -> tuple[int, str] | None:
+    """The first row at which an output or monitor of ``values`` is not finite, and the
+    message of the stop there; None if every value is finite."""
     first = None
     for name, value in values.items():
         rows = np.asarray(value).reshape(len(value), -1)
         bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
         if len(bad) and (first is None or bad[0] < first[0]):
             first = (int(bad[0]), name)
-    return first
+    if first is None:
+        return None
+    k, name = first
+    kind = "monitor" if name in model.monitors else "output"
+    return k, f"the {kind} {name} became non-finite at t = {times[k]}; results kept up to there"
 
 
 def _direction(d: int) -> Any:

@@ -462,6 +462,11 @@ def _ensemble_group(
         # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
         rows = np.array([pars[i].copy() for _ in range(reached)]).reshape(reached, len(pars[i]))
         values = engine.evaluate_outputs(compiled, model, states, rows, grid[:reached], prec)
+        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
+            # As a lone run would: the member stops at its first non-finite output.
+            k, part.message[row] = bad
+            part.status[row], complete = FAILED, False
+            values = {n: v[:k] for n, v in values.items()}
         _record(part, row, layout, prec, values, model.conserved, complete)
 
 

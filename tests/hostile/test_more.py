@@ -239,3 +239,24 @@ def test_plot_that_cannot_be_drawn_is_refused(
     argv = ["plot", str(projectile_result), "--kind", kind, "--out", str(out)]
     hostile.run(argv, expect="refused", field=words)
     assert not out.exists()
+
+
+@pytest.mark.parametrize("formulation", ["quaternion", "rodrigues"])
+def test_sweep_member_whose_output_overflows_later_fails(hostile, tmp_path, formulation):
+    """Both sweep paths (heyoka's ensemble for the quaternion form, one run per member for
+    Rodrigues' chart with its re-basings) stop a member as a lone run stops."""
+    scene = {
+        "body": {"inertia": [1.0, 1.5, 2.5]},
+        "initial": {"rates": [0.3, 1.0, 0.5]},
+        "attitude": {"formulation": formulation},
+        "forces": {"potential": {"V": "1/(t - 1) + 0.3*R33"}},
+        "output": {"times": {"start": 0.0, "stop": 2.0, "count": 5}},
+    }
+    study = hostile.scene(
+        {"title": "s", "scene": scene,
+         "sweep": {"kind": "grid", "parameters": {"initial.rates[0]": [0.1, 0.2]}}}
+    )  # fmt: skip
+    out = tmp_path / "s.h5"
+    o = hostile.run(["sweep", str(study), "--out", str(out)], expect="stopped", out=out)
+    assert "0 completed, 2 failed" in o.stdout
+    assert o.stdout.count("the monitor energy became non-finite at t = 1.0") == 2
