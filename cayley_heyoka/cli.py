@@ -302,12 +302,21 @@ def summary(result: Result) -> str:
                 d = float(np.max(np.abs(result.drift(name)[-1])))
                 lines.append(f"    {name:<20} {d:.3e}")
             elif len(arr):
-                lines.append(f"    {name:<20} largest |value| {float(np.max(np.abs(arr))):.3e}")
+                lines.append(f"    {name:<20} largest |value| {_sci(np.max(np.abs(arr)))}")
     for name, log in result.events.items():
         labels, counts = np.unique(log.label, return_counts=True)
         detail = ", ".join(f"{lab}: {c}" for lab, c in zip(labels, counts, strict=True))
         lines.append(f"  event {name:<12} {len(log)} occurrences ({detail or 'none'})")
     return "\n".join(lines)
+
+
+def _sci(value: Any) -> str:
+    """``value`` to four digits; a quad or MPFR number beyond double's range is not 'inf'."""
+    if np.isfinite(x := float(value)):
+        return f"{x:.3e}"
+    import mpmath
+
+    return mpmath.nstr(mpmath.mpf(str(value)), 4, min_fixed=0, max_fixed=0)
 
 
 if __name__ == "__main__":  # pragma: no cover

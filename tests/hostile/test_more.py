@@ -260,3 +260,13 @@ def test_sweep_member_whose_output_overflows_later_fails(hostile, tmp_path, form
     o = hostile.run(["sweep", str(study), "--out", str(out)], expect="stopped", out=out)
     assert "0 completed, 2 failed" in o.stdout
     assert o.stdout.count("the monitor energy became non-finite at t = 1.0") == 2
+
+
+@pytest.mark.parametrize("precision", ["quad", {"bits": 128}])
+def test_value_beyond_double_range_is_summarised_not_as_inf(hostile, precision):
+    """exp(exp(exp(2))) = 5.831e+702 is finite in quad and MPFR: a correct run, shown as such
+    (the energy at t = 2 is that and a kinetic energy of order 1)."""
+    data = _potential("exp(exp(exp(t))) + 0.3*R33", precision)
+    o = hostile.run(["run", str(hostile.scene(data))], expect="done")
+    (line,) = [ln for ln in o.stdout.splitlines() if ln.strip().startswith("energy")]
+    assert line.split() == ["energy", "largest", "|value|", "5.831e+702"], line
