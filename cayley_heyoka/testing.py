@@ -333,19 +333,30 @@ class DriftEnvelope:
         """Read an envelope written by :meth:`save`."""
         import h5py
 
-        with h5py.File(path, "r") as f:
+        path = Path(path)
+        if not path.is_file():  # a FIFO would block the open; say what it is instead
+            raise ValueError(f"{path}: {'no such file' if not path.exists() else 'not a file'}")
+        try:
+            f = h5py.File(path, "r")
+        except OSError as exc:
+            raise ValueError(f"{path}: not an HDF5 file ({exc})") from None
+        with f:
             if f.attrs.get("format") != DRIFT_FORMAT:
                 raise ValueError(f"{path}: not a {DRIFT_FORMAT} file")
-            g = f["peaks"]
-            return cls(
-                windows=np.asarray(f["windows"][()], dtype=np.float64),
-                peaks={
-                    k: np.asarray(g[k][()], dtype=np.float64) for k in json.loads(g.attrs["order"])
-                },
-                precision=Precision.from_spec(json.loads(f.attrs["precision"])),
-                title=str(f.attrs["title"]),
-                metadata=json.loads(f.attrs["metadata"]),
-            )
+            try:
+                g = f["peaks"]
+                return cls(
+                    windows=np.asarray(f["windows"][()], dtype=np.float64),
+                    peaks={
+                        k: np.asarray(g[k][()], dtype=np.float64)
+                        for k in json.loads(g.attrs["order"])
+                    },
+                    precision=Precision.from_spec(json.loads(f.attrs["precision"])),
+                    title=str(f.attrs["title"]),
+                    metadata=json.loads(f.attrs["metadata"]),
+                )
+            except (KeyError, TypeError, ValueError) as exc:  # ValueError: JSONDecodeError too
+                raise ValueError(f"{path}: a damaged {DRIFT_FORMAT} file ({exc})") from None
 
 
 def drift_envelope(result: Result, windows: int | np.ndarray = 8) -> DriftEnvelope:
@@ -399,14 +410,19 @@ def drift_envelope(result: Result, windows: int | np.ndarray = 8) -> DriftEnvelo
     )
 
 
+#: The most windows :func:`drift_envelope` makes from a count.
+MAX_WINDOWS = 1000
+
+
 def _windows(t: np.ndarray, windows: int | np.ndarray) -> np.ndarray:
     if isinstance(windows, bool):
         raise TypeError(
             f"windows must be an int or an array of (start, end] pairs, got {windows!r}"
         )
     if isinstance(windows, int | np.integer):
-        if windows < 1:
-            raise ValueError(f"windows must be >= 1, got {windows}")
+        # Each window halves the span before it: past ~1000 they are below any precision.
+        if not 1 <= windows <= MAX_WINDOWS:
+            raise ValueError(f"windows must be in 1 … {MAX_WINDOWS}, got {windows}")
         t0, span = t[0], t[-1] - t[0]
         ends = t0 + span * 2.0 ** np.arange(1 - int(windows), 1)
         ends[-1] = t[-1]

@@ -188,6 +188,12 @@ def test_envelope_round_trips_through_its_file(tmp_path, double_run):
     double_run.save(tmp_path / "r.h5")
     with pytest.raises(ValueError, match=r"not a cayley_heyoka\.drift file"):
         DriftEnvelope.load(tmp_path / "r.h5")
+    os.mkfifo(tmp_path / "fifo")  # opening it would wait for a writer
+    (tmp_path / "text.h5").write_text("not HDF5")
+    for name, words in [("missing.h5", "no such file"), ("fifo", "not a file"),
+                        ("text.h5", "not an HDF5 file")]:  # fmt: skip
+        with pytest.raises(ValueError, match=words):
+            DriftEnvelope.load(tmp_path / name)
 
 
 def test_drift_within_golden_and_the_message_of_a_worse_one():
@@ -225,8 +231,10 @@ def test_drift_comparison_refuses_what_cannot_be_compared(quad_run):
         assert_drift_within(synthetic(), golden, floor=-1)
     with pytest.raises(ValueError, match=r"measured: its windows differ"):
         assert_drift_within(drift_envelope(synthetic(), windows=3), golden)
-    with pytest.raises(ValueError, match=r"windows must be >= 1, got 0"):
+    with pytest.raises(ValueError, match=r"windows must be in 1 … 1000, got 0"):
         drift_envelope(synthetic(), windows=0)
+    with pytest.raises(ValueError, match=r"windows must be in 1 … 1000, got 1000000000"):
+        drift_envelope(synthetic(), windows=10**9)
     no_conserved = dataclasses.replace(synthetic(), conserved=())
     with pytest.raises(ValueError, match=r"result: the scene has no conserved monitor"):
         drift_envelope(no_conserved)
