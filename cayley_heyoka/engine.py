@@ -290,9 +290,8 @@ class Propagation:
         for name, value in first.items():
             kind = "monitors" if name in model.monitors else "outputs"
             _require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
-        self._ta = ta = copy.deepcopy(self.compiled.integrator)
-        ta.time = self.grid[0]
-        ta.state[:] = initial
+        self._initial = initial
+        self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)
         ta.pars[:] = self._pars[: self._held]
         self._signals = _DeferredSignals()
@@ -310,6 +309,9 @@ class Propagation:
         #: Output times recorded so far.
         self.done = 0
         self._span, self._since_event = len(self.grid), 0
+        # The first steps estimate what the whole span needs (``_estimate``); the first call
+        # is cut short to take them (``_PROBE_STEPS``).
+        self._first_call, self._estimated = True, False
 
     @property
     def time(self) -> Any:
@@ -388,8 +390,19 @@ class Propagation:
             callback = self._callback or (
                 self._signals.callback_for(ta) if self._signals.active else None
             )
-            res = ta.propagate_grid(points, callback=callback, max_steps=left, **self._limit)
+            first, self._first_call = self._first_call, False
+            limit = min(left, _PROBE_STEPS) if first else left
+            res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
             outcome, out = res[0], res[-1]
+            taken = self.counters["steps"] + res[3]
+            cut = first and outcome == hy.taylor_outcome.step_limit and limit < left
+            if not self._estimated and (taken >= _PROBE_MIN_STEPS or cut):
+                self._estimated = True
+                self._estimate(taken, ta.time, budget)
+            if cut:
+                # Resuming this call would change bits (see below): start again, uncut.
+                ta = self._restart()
+                continue
             out = out[int(resume) : int(resume) + outputs]
             self.counters["steps"] += res[3]
             states.append(out)
@@ -421,6 +434,50 @@ class Propagation:
                 self.message = f"stopped by the progress callback at t = {ta.time}"
             else:
                 self.message = f"stopped at t = {ta.time} with outcome {outcome}"
+
+    def _fresh_integrator(self) -> Any:
+        ta = copy.deepcopy(self.compiled.integrator)
+        ta.time = self.grid[0]
+        ta.state[:] = self._initial
+        return ta
+
+    def _restart(self) -> Any:
+        """Back to the first output time with a new copy of the template integrator (its
+        event recorders empty); nothing was recorded or handled yet."""
+        self._ta = ta = self._fresh_integrator()
+        ta.pars[:] = self._pars[: self._held]
+        self.counters["steps"] = 0
+        return ta
+
+    def _estimate(self, steps: int, reached: Any, budget: int) -> None:
+        """Refuse a run whose first steps show it needs far more steps than its budget.
+
+        A span of 1e300 would otherwise spend the whole budget (10⁹ steps: many minutes)
+        before stopping. The rate of the first steps (at least :data:`_PROBE_MIN_STEPS`, or
+        the :data:`_PROBE_STEPS` of a first call that did not reach its end) extrapolated
+        over the span must stay within :data:`_ESTIMATE_MARGIN` times the budget; the margin
+        leaves room for motions whose steps lengthen (an estimate, so only the absurd is
+        refused).
+        """
+        if steps < _PROBE_MIN_STEPS:
+            return
+        first, last = self.scene.output.span()
+        start, stop = exact_fraction(first), exact_fraction(last)
+        try:
+            covered = exact_fraction(str(reached)) - start
+        except (ValueError, ArithmeticError):  # the state (and heyoka's time) became NaN
+            return
+        if covered <= 0:
+            return
+        needed = steps * (stop - start) / covered
+        if needed > _ESTIMATE_MARGIN * budget:
+            raise SceneError(
+                "output.times",
+                f"the span to t = {last} needs about "
+                f"{float(needed):.3g} steps (the first {steps} reached t = {reached}), more than "
+                f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
+                "shorten the span, or raise integrator.max_steps if the steps will lengthen",
+            )
 
     def _out_of_steps(self, budget: int) -> None:
         self.status = -1
@@ -471,6 +528,8 @@ class Propagation:
     def restore(self, snapshot: dict[str, Any]) -> None:
         """Continue from a :meth:`snapshot` of a run of the same scene."""
         prec, ta = self.precision, self._ta
+        # Its first steps were taken (and the span estimated) before the snapshot.
+        self._first_call, self._estimated = False, True
         self.done, self._span = int(snapshot["done"]), int(snapshot["span"])
         self._since_event = int(snapshot["since_event"])
         hi, lo = prec.from_text(snapshot["time"])
@@ -528,6 +587,13 @@ class Propagation:
 
 
 # ---------------------------------------------------------------------- internals
+#: Steps at most of a run's first call (a run that needs more starts again after it, so that
+#: its bits do not depend on the cut); :meth:`Propagation._estimate` extrapolates from the
+#: first ``_PROBE_MIN_STEPS`` or more, over as many calls as terminal events make.
+_PROBE_STEPS = 1_000
+_PROBE_MIN_STEPS = 16
+_ESTIMATE_MARGIN = 10
+
 #: Output times added to a propagate_grid call after a terminal event (see ``run``).
 _RESUME_SPAN = 8
 

@@ -226,3 +226,42 @@ def test_a_signal_during_compilation_ends_the_process_at_once(tmp_path, sig):
     # Killed by the signal while compiling, or (on a slow start) interrupted just before.
     assert proc.returncode in (-sig, 130), err
     assert time.monotonic() - sent < 15 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("attitude", ["none", "rodrigues"])
+def test_a_span_far_beyond_the_budget_is_refused_from_its_first_steps(attitude):
+    """stop = 1e300 would spend the whole budget (10⁹ steps, minutes) before stopping; the
+    first steps' rate, extrapolated, refuses it — also when chart re-basings (terminal events
+    every ~16 steps) split the first steps into many calls."""
+    data = free_body(
+        attitude={"formulation": attitude},
+        output={"times": {"start": "0", "stop": "1e300", "count": 11}},
+    )
+    if attitude == "none":
+        data.pop("initial", None)
+        data["initial"] = {"rates": ["0.75", "-0.5", "0.625"]}
+    with pytest.raises(SceneError, match="output.times: the span to t = 1e300 needs about"):
+        ch.run(ch.Scene.from_dict(data))
+
+
+def test_a_span_within_the_budget_runs(monkeypatch):
+    """A long run is cut after its first steps for the estimate and started again: the same
+    bits as a run that is never cut, and a budget a little above its steps suffices."""
+
+    def scene(**integrator) -> ch.Scene:
+        data = free_body(
+            attitude={"formulation": "quaternion"},
+            integrator=integrator,
+            output={"times": {"start": "0", "stop": "2000", "count": 201}},
+        )
+        return ch.Scene.from_dict(data)
+
+    whole = ch.run(scene())
+    assert whole.counters["steps"] > 2 * engine._PROBE_STEPS
+    monkeypatch.setattr(engine, "_PROBE_STEPS", 10**12)
+    uncut = ch.run(scene())
+    assert whole.counters == uncut.counters
+    _same(whole, uncut)
+    monkeypatch.undo()
+    snug = ch.run(scene(max_steps=whole.counters["steps"] + 1))
+    _same(snug, whole)

@@ -242,9 +242,19 @@ def test_tolerance_at_epsilon_runs(hostile):
 
 
 @pytest.mark.parametrize("stop", ["1e300", "1e6"])
-def test_step_budget_stops_a_run_and_keeps_its_results(hostile, tmp_path, stop):
+def test_a_span_far_beyond_the_step_budget_is_refused(hostile, stop):
     data = small("free_body")
     data["output"]["times"] = {"start": 0, "stop": Raw(stop), "count": 11}
+    data["integrator"]["max_steps"] = 2000
+    o = hostile.run(
+        ["run", str(hostile.scene(data)), "--no-progress"], expect="refused", field="output.times"
+    )
+    assert "more than 10 times the step budget" in o.error_line
+
+
+def test_step_budget_stops_a_run_and_keeps_its_results(hostile, tmp_path):
+    data = small("free_body")
+    data["output"]["times"] = {"start": 0, "stop": Raw("1500"), "count": 11}
     data["integrator"]["max_steps"] = 2000
     out = tmp_path / "r.h5"
     o = hostile.run(
