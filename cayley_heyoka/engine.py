@@ -98,6 +98,11 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
 
     Returns the compiled object and whether it came from the cache.
     """
+    key = cache_key(model, options)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit, True
+    # (Only before compiling: a cached structure has passed it.)
     for e in model.events:
         if not hy.get_variables(e.expression) and not _TIME.search(str(e.expression)):
             # heyoka refuses such an event function ("cannot be constants or parameters").
@@ -105,10 +110,6 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
                 f"events.{e.name}.expression",
                 f"is constant ({e.expression}): an event needs the state or t to cross zero",
             )
-    key = cache_key(model, options)
-    hit = _CACHE.get(key)
-    if hit is not None:
-        return hit, True
     with _signals_end_process(), _quiet_heyoka():
         compiled = _compile(model, options)
     _CACHE[key] = compiled
