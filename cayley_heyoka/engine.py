@@ -388,9 +388,7 @@ class Propagation:
             # A call that returned mid-stretch could not be resumed without changing bits
             # (heyoka starts each call with a step to its first point, and the double-length
             # time is not a grid point), so signals are seen by a callback after each step.
-            callback = self._callback or (
-                self._signals.callback_for(ta) if self._signals.active else None
-            )
+            callback = self._callback or (self._signals.callback if self._signals.active else None)
             first, self._first_call = self._first_call, False
             limit = min(left, _PROBE_STEPS) if first else left
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
@@ -638,37 +636,30 @@ class _ProgressCallback:
 
 class _DeferredSignals:
     """Within the context (in the main thread), SIGINT and SIGTERM handled by Python are only
-    noted; the step callback of :meth:`callback_for`, called by heyoka after each step, then
-    stops the propagation.
+    noted; :meth:`callback`, called by heyoka after each step, then stops the propagation.
 
-    The callback is a set's ``__contains__`` holding the integrator, emptied by a signal: a
-    call from C++ into C with no Python frame, ~0.1 µs a step (a Python function: ~0.2 µs).
-    Measured side by side on the bundled scenes in double, 3–16 % of the wall time (most
-    where a step is cheapest, ~1 µs: the free body); nothing measurable in quad
-    (``python validation/interrupt_cost.py``).
+    The callback must be a Python function: Python runs a signal's handler only between
+    bytecodes of the main thread, so a C-level callable (a set's ``__contains__``, tried)
+    would never let the handler note anything while heyoka propagates. Measured side by side
+    on the bundled scenes in double it costs 6–18 % of the wall time, most where a step is
+    cheapest (the free body, ~1 µs a step), nothing measurable in quad
+    (``python validation/interrupt_cost.py --stop 40000``).
     """
 
     def __init__(self) -> None:
         self.received = ""
         self._old: dict[int, Any] = {}
-        self._running: set[Any] = set()
 
     @property
     def active(self) -> bool:
         """Whether signals are being noted (the context is entered in the main thread)."""
         return bool(self._old)
 
-    def callback_for(self, ta: Any) -> Callable[[Any], bool]:
-        """heyoka's step callback for ``ta``: true (go on) until a signal is noted."""
-        running = {ta}
-        self._running = running
-        if self.received:  # noted before the set was in place
-            running.clear()
-        return running.__contains__
+    def callback(self, ta: Any) -> bool:
+        return not self.received
 
     def _note(self, signum: int, frame: Any) -> None:
         self.received = signal.Signals(signum).name
-        self._running.clear()
 
     def __enter__(self) -> _DeferredSignals:
         if threading.current_thread() is threading.main_thread():

@@ -265,3 +265,26 @@ def test_a_span_within_the_budget_runs(monkeypatch):
     monkeypatch.undo()
     snug = ch.run(scene(max_steps=whole.counters["steps"] + 1))
     _same(snug, whole)
+
+
+def test_a_signal_stops_a_run_without_progress_bar_or_terminal_events(tmp_path):
+    """The watch alone (no progress callback, and no terminal event returning to Python
+    between calls) must let Python note the signal: a run of minutes ends within seconds."""
+    scene = tmp_path / "long.toml"
+    scene.write_text(
+        "[body]\ninertia = [1, 2, 3]\n[initial]\nrates = [0.75, -0.5, 0.625]\n"
+        'quaternion = [1, 0, 0, 0]\n[attitude]\nformulation = "quaternion"\n'
+        "[output]\ntimes = { start = 0, stop = 1e8, count = 101 }\n"
+    )
+    out = tmp_path / "r.h5"
+    cmd = [sys.executable, "-m", "cayley_heyoka.cli", "run", str(scene), "--out", str(out)]
+    proc = subprocess.Popen(cmd + ["--no-progress"], stderr=subprocess.PIPE, text=True)
+    time.sleep(4)
+    proc.send_signal(signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=20)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert "interrupted (SIGINT)" in err
+    assert "interrupted" in ch.load_result(out).message
