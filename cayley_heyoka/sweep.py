@@ -12,9 +12,12 @@ docs/tutorials/sweeps.md).
 How members are integrated, on one machine (:func:`propagate_members`):
 
 * members are grouped by compiled structure (scenes differing only in numbers share code);
-* a group without terminal events goes through heyoka's ensemble propagation
+* a group without terminal events, in double precision, goes through heyoka's batch
+  integrators in SIMD lanes, one per thread (:mod:`.lanes`, which ``propagate_ensemble``
+  shares): the steps and events of :func:`cayley_heyoka.run`, its states to a few ulps;
+* in quad or multiprecision, through heyoka's ensemble propagation
   (``heyoka.ensemble_propagate_grid``, threads), each member's state, parameters and start time
-  set on a copy of the compiled integrator;
+  set on a copy of the compiled integrator (run()'s bits);
 * a group with terminal events (the Rodrigues chart's re-basing, the orbit's revolution count
   and equatorial stop, Encke's rectification) goes through :func:`cayley_heyoka.run`, since
   their handlers cannot run inside heyoka's ensemble;
@@ -64,6 +67,7 @@ from .sweep_result import (
 )
 
 #: How a member was integrated (the counts by path are in the file's metadata).
+PATH_LANES = "cayley_heyoka.lanes"
 PATH_ENSEMBLE = "heyoka.ensemble_propagate_grid"
 PATH_RUN = "cayley_heyoka.run"
 
@@ -234,10 +238,15 @@ def propagate_members(
             counters = ", ".join(t.counter for t in terminal)
             part.why[PATH_RUN] = f"terminal events: {counters}"
             _run_group(group, part, layout, prec, threads)
-            part.paths[PATH_RUN] = part.paths.get(PATH_RUN, 0) + len(group)
+            path = PATH_RUN
+        elif prec.kind == "double":
+            _lanes_group(group, part, layout, prec, threads)
+            path = PATH_LANES
         else:
+            part.why[PATH_ENSEMBLE] = f"{prec.name}: heyoka's batch integrators are double only"
             _ensemble_group(group, part, layout, prec, threads)
-            part.paths[PATH_ENSEMBLE] = part.paths.get(PATH_ENSEMBLE, 0) + len(group)
+            path = PATH_ENSEMBLE
+        part.paths[path] = part.paths.get(path, 0) + len(group)
     return part
 
 
@@ -399,6 +408,48 @@ def _run_group(
 
     with ThreadPoolExecutor(max_workers=max(1, min(threads, len(group)))) as pool:
         list(pool.map(one, group))
+
+
+def _lanes_group(
+    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
+) -> None:
+    """Members sharing compiled code, without terminal events, in double: batch lanes."""
+    from . import engine, lanes
+
+    _, scene0, model0 = group[0]
+    compiled, cached = engine.compile_model(model0, scene0.integrator)  # the outputs' evaluator
+    batch, batch_cached = lanes.compile_batch(model0, scene0.integrator)
+    part.compile_seconds += (0 if cached else compiled.compile_seconds) + (
+        0 if batch_cached else batch.compile_seconds
+    )
+    grid = scene0.output.time_grid(prec)
+    initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
+    pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
+    try:
+        with engine.quiet_heyoka():  # a member going non-finite is reported as such
+            runs = lanes.propagate_members(model0, scene0.integrator, grid, initial, pars, threads)
+    except Exception as exc:  # the whole call failed: every member of the group is marked
+        for row, _, _ in group:
+            part.message[row] = _reason(exc)
+        return
+    for (row, _, model), run in zip(group, runs, strict=True):
+        reached = len(run.states)
+        values = engine.evaluate_outputs(
+            compiled, model, run.states, run.pars, grid[:reached], prec
+        )
+        complete = run.status == 0
+        part.message[row] = run.message
+        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
+            # As a lone run would: the member stops at its first non-finite output.
+            k, part.message[row] = bad
+            complete = False
+            values = {n: v[:k] for n, v in values.items()}
+        part.status[row] = OK if complete else FAILED
+        part.steps[row] = run.counters["steps"]
+        for name in layout.events:
+            log = run.events.get(name)
+            part.events[name][row] = len(log) if log is not None else 0
+        _record(part, row, layout, prec, values, model.conserved, complete)
 
 
 def _ensemble_group(
