@@ -145,6 +145,7 @@ def propagate_members(
     initial: np.ndarray,
     pars: np.ndarray,
     threads: int = 1,
+    cancel: threading.Event | None = None,
 ) -> list[LaneResult]:
     """Integrate members of ``model``'s structure over ``grid``, lanes at a time.
 
@@ -162,6 +163,8 @@ def propagate_members(
         ``(members, len(model.pars))``: each member's whole parameter vector.
     threads
         Batch integrators run at once, each on its share of the members.
+    cancel
+        Once set, the lanes stop after their current call (members not finished are None).
 
     Returns
     -------
@@ -183,7 +186,7 @@ def propagate_members(
     def work() -> None:
         ta = compiled.take()
         try:
-            lanes = _Lanes(ta, compiled.width, model, options, grid, next_member, results)
+            lanes = _Lanes(ta, compiled.width, model, options, grid, next_member, results, cancel)
             lanes.run(initial, pars)
         finally:
             compiled.give(ta)
@@ -257,7 +260,8 @@ class _Member:
 
 
 class _Lanes:
-    def __init__(self, ta, width, model, options, grid, next_member, results) -> None:
+    def __init__(self, ta, width, model, options, grid, next_member, results, cancel) -> None:
+        self.cancel = cancel
         self.ta, self.width, self.model, self.grid = ta, width, model, grid
         self.next_member, self.results = next_member, results
         self.budget = options.max_steps
@@ -271,6 +275,8 @@ class _Lanes:
         for j in range(self.width):
             self._assign(j)
         while any(m is not None for m in self.lanes):
+            if self.cancel is not None and self.cancel.is_set():
+                return
             self._step()
 
     def _assign(self, j: int) -> None:

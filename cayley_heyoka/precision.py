@@ -9,6 +9,7 @@ would carry the double rounding error of ``1.1`` into a quadruple-precision run;
 from __future__ import annotations
 
 import functools
+import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -385,6 +386,15 @@ def unit_length(values: Iterable[Number], tolerance: Fraction) -> tuple[bool, st
 
 def fraction_text(value: Fraction, precision: Precision) -> str:
     """Decimal text of a rational, with enough digits to round correctly in ``precision``."""
+    if precision.kind == "double":
+        # Python's int / int is correctly rounded; repr round-trips that double. Beyond
+        # double's range the decimal text below lets Precision.number refuse it by name.
+        try:
+            x = value.numerator / value.denominator
+        except OverflowError:
+            x = math.inf
+        if math.isfinite(x) and (x != 0) == (value != 0):
+            return repr(x)
     import mpmath
 
     with mpmath.workdps(precision.dps + 15):
