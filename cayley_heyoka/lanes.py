@@ -176,17 +176,19 @@ def propagate_members(
     compiled, _ = compile_batch(model, options)
     members = len(initial)
     results: list[LaneResult | None] = [None] * members
-    queue = iter(range(members))
+    starts = iter(range(0, members, compiled.width))
     lock = threading.Lock()
 
-    def next_member() -> int | None:
+    def next_block() -> list[int]:
+        """The next members for a batch (none when all are taken)."""
         with lock:
-            return next(queue, None)
+            lo = next(starts, members)
+        return list(range(lo, min(lo + compiled.width, members)))
 
     def work() -> None:
         ta = compiled.take()
         try:
-            lanes = _Lanes(ta, compiled.width, model, options, grid, next_member, results, cancel)
+            lanes = _Lanes(ta, compiled.width, model, options, grid, next_block, results, cancel)
             lanes.run(initial, pars)
         finally:
             compiled.give(ta)
@@ -252,7 +254,6 @@ class _Member:
     status: int = 0
     message: str = "every output time was reached"
     states: list[np.ndarray] = field(default_factory=list)
-    pars_rows: list[np.ndarray] = field(default_factory=list)
     event_times: list[list[float]] = field(default_factory=list)
     event_directions: list[list[int]] = field(default_factory=list)
     time: float = 0.0
@@ -260,18 +261,81 @@ class _Member:
 
 
 class _Lanes:
-    def __init__(self, ta, width, model, options, grid, next_member, results, cancel) -> None:
+    def __init__(self, ta, width, model, options, grid, next_block, results, cancel) -> None:
         self.cancel = cancel
         self.ta, self.width, self.model, self.grid = ta, width, model, grid
-        self.next_member, self.results = next_member, results
+        self.next_block, self.results = next_block, results
         self.budget = options.max_steps
         self.limit = {} if options.max_step is None else {"max_delta_t": float(options.max_step)}
         self.held = ta.pars.shape[0]
         self.recorders = [ev.callback for ev in ta.nt_events] if model.events else []
+        self.table: np.ndarray | None = None
         self.lanes: list[_Member | None] = [None] * width
 
     def run(self, initial: np.ndarray, pars: np.ndarray) -> None:
+        """Members a batch at a time: one call over the whole grid, the usual case; a batch in
+        which a lane stops short (a non-finite state, the step budget) is run again lane by
+        lane (:meth:`_lane_by_lane`), with the same bits up to its stop."""
         self.initial, self.pars = initial, pars
+        while not (self.cancel is not None and self.cancel.is_set()):
+            block = self.next_block()
+            if not block:
+                return
+            if not self._at_once(block):
+                self._lane_by_lane(block)
+
+    def _at_once(self, block: list[int]) -> bool:
+        """Integrate ``block`` in one call over the grid; False if a lane did not reach its
+        end (nothing is recorded then)."""
+        ta, width, grid = self.ta, self.width, self.grid
+        lanes = block + [block[-1]] * (width - len(block))  # spare lanes copy the last member
+        ta.set_dtime(np.full(width, grid[0]), np.zeros(width))
+        ta.state[:] = self.initial[lanes].T
+        ta.pars[:] = self.pars[lanes, : self.held].T
+        for rec in self.recorders:
+            rec.clear()
+        if ta.with_events:
+            ta.reset_cooldowns()
+        if len(grid) == 2:
+            # Two points: the start and where propagate_until ends (an ensemble's case; the
+            # same steps as a grid's, and its last output is the state it ends at).
+            first = ta.state.copy()
+            ta.propagate_until(grid[-1], max_steps=self.budget, **self.limit)
+            out = np.stack([first, ta.state])
+            res = ta.propagate_res
+        elif len(grid) > 2:
+            if self.table is None:
+                self.table = np.repeat(grid[:, None], width, axis=1)
+            out = ta.propagate_grid(self.table, max_steps=self.budget, **self.limit)[-1]
+            res = ta.propagate_res
+        else:
+            out = ta.state.copy()[None, :, :]
+            res = [(hy.taylor_outcome.time_limit, 0, 0, 0)] * width
+        end, times = grid[-1], ta.time
+        done = hy.taylor_outcome.time_limit
+        if any(res[j][0] != done or times[j] != end for j in range(len(block))):
+            return False
+        for j, index in enumerate(block):
+            recorded = [rec.take(j) for rec in self.recorders]
+            self.results[index] = LaneResult(
+                out[:, :, j].copy(),
+                self.pars[index],
+                0,
+                "every output time was reached",
+                {"steps": int(res[j][3])},
+                engine.logs_of(self.model, recorded, _DOUBLE, None) if recorded else {},
+                float(end),
+                False,
+            )
+        return True
+
+    def _lane_by_lane(self, block: list[int]) -> None:
+        """Integrate ``block`` lane by lane on the engine's schedule of calls (see the module
+        docstring), each lane given the next of them when its own is done."""
+        pending = iter(block)
+        self._next = lambda: next(pending, None)
+        for rec in self.recorders:
+            rec.clear()
         for j in range(self.width):
             self._assign(j)
         while any(m is not None for m in self.lanes):
@@ -281,7 +345,7 @@ class _Lanes:
 
     def _assign(self, j: int) -> None:
         """Give lane ``j`` the next member, or nothing (then it follows a busy lane)."""
-        index = self.next_member()
+        index = self._next()
         if index is None:
             self.lanes[j] = None
             return
@@ -403,7 +467,6 @@ class _Lanes:
 
     def _keep(self, m: _Member, rows: np.ndarray) -> None:
         m.states.append(rows)
-        m.pars_rows.append(np.repeat(m.pars[None, :], len(rows), axis=0))
         m.done += len(rows)
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
@@ -415,13 +478,11 @@ class _Lanes:
 
     def _finish(self, j: int) -> None:
         m = self.lanes[j]
-        dim, npar = self.ta.dim, len(m.pars)
-        states = np.concatenate(m.states) if m.states else np.empty((0, dim))
-        pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, npar))
+        states = np.concatenate(m.states) if m.states else np.empty((0, self.ta.dim))
         recorded = list(zip(m.event_times, m.event_directions, strict=True))
         events = engine.logs_of(self.model, recorded, _DOUBLE, None)
         self.results[m.index] = LaneResult(
-            states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
+            states, m.pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
         )
         self._assign(j)
 

@@ -412,8 +412,9 @@ def _split(items: list, size: int) -> Iterator[list]:
 def _group_key(model: Any, scene: Scene) -> str:
     from .engine import cache_key
 
-    # A step cap is a runtime argument shared by one ensemble call.
-    return f"{cache_key(model, scene.integrator)}/{scene.integrator.max_step}"
+    # A step cap and the step budget are runtime arguments shared by one batch call.
+    options = scene.integrator
+    return f"{cache_key(model, options)}/{options.max_step}/{options.max_steps}"
 
 
 def _reason(exc: BaseException) -> str:
@@ -522,9 +523,8 @@ def _lanes_group(
         return  # the chunk is dropped
     for (row, _, model), run in zip(group, runs, strict=True):
         reached = len(run.states)
-        values = engine.evaluate_outputs(
-            compiled, model, run.states, run.pars, grid[:reached], prec
-        )
+        rows = np.repeat(run.pars[None, :], reached, axis=0)
+        values = engine.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
         complete = run.status == 0
         part.message[row] = run.message
         if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:

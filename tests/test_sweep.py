@@ -256,6 +256,29 @@ def test_lane_members_do_not_depend_on_their_lane_mates(body_sweep):
         np.testing.assert_array_equal(part.final[row], result.final_state[i])
 
 
+def test_a_lane_member_out_of_steps_stops_as_its_run_does():
+    """A member whose step budget runs out midway stops where run() stops it, with its rows;
+    its lane-mates go on (a batch re-run lane by lane)."""
+    s = study(parameters={"integrator.max_steps": [7, 100000], "body.inertia[1]": ["1.5"]})
+    result = run_sweep(s, workers=1)
+    assert result.metadata["paths"] == {PATH_LANES: 2}
+    for i, values in enumerate(s.members()):
+        scene = s.member_scene(i, values)
+        try:
+            alone = ch.run(scene)
+        except ch.IntegrationError as exc:
+            alone = exc.result
+        assert result.steps[i] == alone.counters["steps"]
+        assert result.message[i] == alone.message
+        assert (result.status[i] == OK) == alone.success
+        reached = len(alone.t)
+        for name in alone.conserved:
+            np.testing.assert_allclose(
+                result.drift[name][i][:reached], drift_row(alone, name), atol=1e-14
+            )
+    assert result.status[0] == FAILED and "max_steps = 7" in result.message[0]
+
+
 def test_members_with_terminal_events_go_through_run():
     s = study(scene=RODRIGUES, parameters={"initial.rates[0]": ["0.2", "0.3"]})
     result = run_sweep(s, workers=2)
