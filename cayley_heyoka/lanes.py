@@ -32,6 +32,7 @@ from __future__ import annotations
 import copy
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -39,7 +40,7 @@ import heyoka as hy
 import numpy as np
 
 from . import engine
-from .model import Model
+from .model import Model, TerminalSpec
 from .precision import Precision
 from .result import EventLog
 from .scene import IntegratorOptions
@@ -116,6 +117,10 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
             hy.nt_event_batch(e.expression, _LaneRecorder(), direction=engine.event_direction(e))
             for e in model.events
         ]
+        te = [
+            hy.t_event_batch(e.expression, direction=engine.event_direction(e))
+            for e in model.terminal
+        ]
         extra = {} if options.tolerance is None else {"tol": _DOUBLE.number(options.tolerance)}
         state = np.repeat(np.asarray(model.initial_state, dtype=float)[:, None], width, axis=1)
         pars = np.asarray(model.pars.values[:held], dtype=float)
@@ -126,6 +131,7 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
             compact_mode=compact,
             high_accuracy=options.high_accuracy,
             nt_events=nt,
+            t_events=te,
             **extra,
         )
         compiled = CompiledBatch(ta, width, time.perf_counter() - t0)
@@ -146,13 +152,14 @@ def propagate_members(
     pars: np.ndarray,
     threads: int = 1,
     cancel: threading.Event | None = None,
+    terminal: Sequence[Sequence[TerminalSpec]] | None = None,
 ) -> list[LaneResult]:
     """Integrate members of ``model``'s structure over ``grid``, lanes at a time.
 
     Parameters
     ----------
     model
-        The structure (any member's model), without terminal events.
+        The structure (any member's model).
     options
         The members' integrator options (double precision; a ``max_step`` applies to all).
     grid
@@ -165,16 +172,19 @@ def propagate_members(
         Batch integrators run at once, each on its share of the members.
     cancel
         Once set, the lanes stop after their current call (members not finished are None).
+    terminal
+        Each member's terminal events (its own model's, whose handlers may keep state of their
+        own); default: copies of ``model``'s for every member.
 
     Returns
     -------
     list of LaneResult
         In the order of the members.
     """
-    if model.terminal:
-        raise ValueError("members with terminal events run one by one (cayley_heyoka.run)")
     compiled, _ = compile_batch(model, options)
     members = len(initial)
+    if terminal is None:
+        terminal = _Copies(model.terminal)
     results: list[LaneResult | None] = [None] * members
     starts = iter(range(0, members, compiled.width))
     lock = threading.Lock()
@@ -189,7 +199,7 @@ def propagate_members(
         ta = compiled.take()
         try:
             lanes = _Lanes(ta, compiled.width, model, options, grid, next_block, results, cancel)
-            lanes.run(initial, pars)
+            lanes.run(initial, pars, terminal)
         finally:
             compiled.give(ta)
 
@@ -239,12 +249,44 @@ class _LaneRecorder:
         return self.times.pop(lane, []), self.directions.pop(lane, [])
 
 
+class _Copies:
+    """Every member's copy of shared terminal events (a handler may keep state of its own)."""
+
+    def __init__(self, specs: Sequence[TerminalSpec]) -> None:
+        self.specs = specs
+
+    def __getitem__(self, index: int) -> list[TerminalSpec]:
+        return [
+            TerminalSpec(s.expression, s.direction, copy.deepcopy(s.handle), s.counter, s.records)
+            if hasattr(s.handle, "checkpoint")
+            else s
+            for s in self.specs
+        ]
+
+
+class _LaneView:
+    """One lane of a batch integrator, as a terminal-event handler sees an integrator."""
+
+    def __init__(self, ta: Any, lane: int) -> None:
+        self._ta, self._lane = ta, lane
+
+    @property
+    def state(self) -> np.ndarray:
+        return self._ta.state[:, self._lane]  # a view: assignments reach the integrator
+
+    @property
+    def time(self) -> float:
+        return float(self._ta.time[self._lane])
+
+
 @dataclass
 class _Member:
     """A lane's member and where it stands in the engine's schedule of calls."""
 
     index: int
     pars: np.ndarray
+    terminal: list[TerminalSpec] = field(default_factory=list)
+    stopped_at: tuple | None = None
     done: int = 0
     span: int = 0
     since_event: int = 0
@@ -254,6 +296,7 @@ class _Member:
     status: int = 0
     message: str = "every output time was reached"
     states: list[np.ndarray] = field(default_factory=list)
+    pars_rows: list[np.ndarray] = field(default_factory=list)
     event_times: list[list[float]] = field(default_factory=list)
     event_directions: list[list[int]] = field(default_factory=list)
     time: float = 0.0
@@ -272,16 +315,17 @@ class _Lanes:
         self.table: np.ndarray | None = None
         self.lanes: list[_Member | None] = [None] * width
 
-    def run(self, initial: np.ndarray, pars: np.ndarray) -> None:
+    def run(self, initial: np.ndarray, pars: np.ndarray, terminal: Any) -> None:
         """Members a batch at a time: one call over the whole grid, the usual case; a batch in
         which a lane stops short (a non-finite state, the step budget) is run again lane by
-        lane (:meth:`_lane_by_lane`), with the same bits up to its stop."""
-        self.initial, self.pars = initial, pars
+        lane (:meth:`_lane_by_lane`), with the same bits up to its stop. Members with terminal
+        events run lane by lane from the start (each event stops the call)."""
+        self.initial, self.pars, self.terminal = initial, pars, terminal
         while not (self.cancel is not None and self.cancel.is_set()):
             block = self.next_block()
             if not block:
                 return
-            if not self._at_once(block):
+            if self.model.terminal or not self._at_once(block):
                 self._lane_by_lane(block)
 
     def _at_once(self, block: list[int]) -> bool:
@@ -350,8 +394,9 @@ class _Lanes:
             self.lanes[j] = None
             return
         pars = np.array(self.pars[index], dtype=float)
-        member = _Member(index, pars, span=len(self.grid))
-        member.counters = {"steps": 0}
+        specs = list(self.terminal[index])
+        member = _Member(index, pars, specs, span=len(self.grid))
+        member.counters = {"steps": 0, **{spec.counter: 0 for spec in specs}}
         member.event_times = [[] for _ in self.model.events]
         member.event_directions = [[] for _ in self.model.events]
         self.lanes[j] = member
@@ -454,11 +499,16 @@ class _Lanes:
             m.call_end = None
         elif m.steps >= self.budget:
             self._out_of_steps(m, t)
+        elif -len(m.terminal) <= (code := int(outcome)) <= -1:
+            m.span, m.since_event, m.call_end = 2 * m.since_event + engine.RESUME_SPAN, 0, None
+            self._terminal(j, m, m.terminal[-code - 1])
         elif outcome == hy.taylor_outcome.err_nf_state:
             m.status, m.nonfinite = -1, True
             when = t if np.isfinite(t) else self.grid[max(m.done - 1, 0)]
             m.message = f"the state became non-finite after t = {when}; results kept up to there"
-        elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit):
+        elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit) or (
+            code < -len(m.terminal)
+        ):
             pass  # another lane stopped the call, this one at the end of a whole step
         elif outcome != hy.taylor_outcome.time_limit:
             m.status = -1
@@ -467,7 +517,21 @@ class _Lanes:
 
     def _keep(self, m: _Member, rows: np.ndarray) -> None:
         m.states.append(rows)
+        if m.terminal:  # handlers change parameters (a chart's base): one row per output
+            m.pars_rows.append(np.repeat(m.pars[None, :], len(rows), axis=0))
         m.done += len(rows)
+
+    def _terminal(self, j: int, m: _Member, spec: TerminalSpec) -> None:
+        ta = self.ta
+        stop = spec.handle(_LaneView(ta, j), m.pars)
+        ta.pars[:, j] = m.pars[: self.held]
+        m.counters[spec.counter] += 1
+        if stop is not None:
+            m.status, m.message = -1, stop
+            if spec.records is not None:
+                m.stopped_at = (spec.records, ta.time[j], spec.direction)
+            return
+        ta.reset_cooldowns(j)
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
         m.status = -1
@@ -479,10 +543,13 @@ class _Lanes:
     def _finish(self, j: int) -> None:
         m = self.lanes[j]
         states = np.concatenate(m.states) if m.states else np.empty((0, self.ta.dim))
+        pars = m.pars
+        if m.terminal:
+            pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
         recorded = list(zip(m.event_times, m.event_directions, strict=True))
-        events = engine.logs_of(self.model, recorded, _DOUBLE, None)
+        events = engine.logs_of(self.model, recorded, _DOUBLE, m.stopped_at)
         self.results[m.index] = LaneResult(
-            states, m.pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
+            states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
         )
         self._assign(j)
 

@@ -12,15 +12,15 @@ docs/tutorials/sweeps.md).
 How members are integrated, on one machine (:func:`propagate_members`):
 
 * members are grouped by compiled structure (scenes differing only in numbers share code);
-* a group without terminal events, in double precision, goes through heyoka's batch
-  integrators in SIMD lanes, one per thread (:mod:`.lanes`, which ``propagate_ensemble``
-  shares): the steps and events of :func:`cayley_heyoka.run`, its states to a few ulps;
-* in quad or multiprecision, through heyoka's ensemble propagation
-  (``heyoka.ensemble_propagate_grid``, threads), each member's state, parameters and start time
-  set on a copy of the compiled integrator (run()'s bits);
-* a group with terminal events (the Rodrigues chart's re-basing, the orbit's revolution count
-  and equatorial stop, Encke's rectification) goes through :func:`cayley_heyoka.run`, since
-  their handlers cannot run inside heyoka's ensemble;
+* in double precision a group goes through heyoka's batch integrators in SIMD lanes, one per
+  thread (:mod:`.lanes`, which ``propagate_ensemble`` shares), terminal events included (the
+  Rodrigues chart's re-basing, the orbit's revolution count and equatorial stop, Encke's
+  rectification: each member's handler acts on its lane): the steps, events and counts of
+  :func:`cayley_heyoka.run`, its states to a few ulps;
+* in quad or multiprecision, a group without terminal events goes through heyoka's ensemble
+  propagation (``heyoka.ensemble_propagate_grid``, threads), each member's state, parameters and
+  start time set on a copy of the compiled integrator (run()'s bits); one with terminal events
+  through :func:`cayley_heyoka.run`, since their handlers cannot run inside heyoka's ensemble;
 * monitors are evaluated from the recorded states by :func:`.engine.evaluate_outputs`.
 
 The Dask backend (:mod:`.sweep_dask`) runs the same function on chunks of members in worker
@@ -280,14 +280,14 @@ def integrate_members(
     part, groups = prepared
     for group in groups.values():
         terminal = group[0][2].terminal
-        if terminal:
-            counters = ", ".join(t.counter for t in terminal)
-            part.why[PATH_RUN] = f"terminal events: {counters}"
-            _run_group(group, part, layout, prec, threads)
-            path = PATH_RUN
-        elif prec.kind == "double":
+        if prec.kind == "double":
             _lanes_group(group, part, layout, prec, threads, cancel)
             path = PATH_LANES
+        elif terminal:
+            counters = ", ".join(t.counter for t in terminal)
+            part.why[PATH_RUN] = f"{prec.name} with terminal events ({counters})"
+            _run_group(group, part, layout, prec, threads)
+            path = PATH_RUN
         else:
             part.why[PATH_ENSEMBLE] = f"{prec.name}: heyoka's batch integrators are double only"
             _ensemble_group(group, part, layout, prec, threads)
@@ -498,7 +498,8 @@ def _lanes_group(
     threads: int,
     cancel: threading.Event | None = None,
 ) -> None:
-    """Members sharing compiled code, without terminal events, in double: batch lanes."""
+    """Members sharing compiled code, in double: batch lanes (each member's own terminal-event
+    handlers acting on its lane)."""
     from . import engine, lanes
 
     _, scene0, model0 = group[0]
@@ -513,7 +514,14 @@ def _lanes_group(
     try:
         with engine.quiet_heyoka():  # a member going non-finite is reported as such
             runs = lanes.propagate_members(
-                model0, scene0.integrator, grid, initial, pars, threads, cancel
+                model0,
+                scene0.integrator,
+                grid,
+                initial,
+                pars,
+                threads,
+                cancel,
+                terminal=[model.terminal for _, _, model in group],
             )
     except Exception as exc:  # the whole call failed: every member of the group is marked
         for row, _, _ in group:
@@ -523,7 +531,7 @@ def _lanes_group(
         return  # the chunk is dropped
     for (row, _, model), run in zip(group, runs, strict=True):
         reached = len(run.states)
-        rows = np.repeat(run.pars[None, :], reached, axis=0)
+        rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
         values = engine.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
         complete = run.status == 0
         part.message[row] = run.message

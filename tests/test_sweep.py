@@ -20,7 +20,6 @@ from cayley_heyoka.sweep import (
     NOT_RUN,
     OK,
     PATH_LANES,
-    PATH_RUN,
     Study,
     SweepResult,
     load_study,
@@ -46,6 +45,20 @@ RODRIGUES = {
     "initial": {"rates": ["0.3", "1", "0.5"], "rodrigues": ["0.1", "0.2", "-0.3"]},
     "attitude": {"formulation": "rodrigues"},
 }
+
+
+# Orbits whose handlers act between steps: ρ's revolutions (Cayley), rectifications (Encke).
+ORBIT_CAYLEY = {
+    "orbit": {
+        "mu": "1",
+        "position": ["0.9", "0.2", "0.1"],
+        "velocity": ["-0.25", "0.85", "0.45"],
+        "formulation": "cayley",
+    },
+    "perturbations": {"zonal": {"J2": "1.0826e-3", "radius": "0.8", "axis": ["0", "0", "1"]}},
+    "output": {"times": {"start": "0", "stop": "30", "count": "31"}, "events": ["node"]},
+}
+ORBIT_ENCKE = {**ORBIT_CAYLEY, "orbit": {**ORBIT_CAYLEY["orbit"], "formulation": "encke"}}
 
 
 def study(scene=BODY, parameters=None, **sweep) -> Study:
@@ -279,19 +292,40 @@ def test_a_lane_member_out_of_steps_stops_as_its_run_does():
     assert result.status[0] == FAILED and "max_steps = 7" in result.message[0]
 
 
-def test_members_with_terminal_events_go_through_run():
-    s = study(scene=RODRIGUES, parameters={"initial.rates[0]": ["0.2", "0.3"]})
+@pytest.mark.parametrize(
+    "scene, members",
+    [
+        (RODRIGUES, ["0.2", "0.3", "0.25"]),  # chart re-basings every few steps
+        (ORBIT_CAYLEY, ["0.85", "0.8", "0.9"]),  # ρ's revolutions (a handler with state)
+        (ORBIT_ENCKE, ["0.85", "0.8", "0.9"]),  # Encke's rectifications
+    ],
+    ids=["rodrigues", "cayley", "encke"],
+)
+def test_members_with_terminal_events_take_the_steps_of_run_in_lanes(scene, members):
+    """Terminal events run in the lanes too, each member's handler on its own lane: run()'s
+    steps, counts and events, states to a few ulps; reordered, the same bits."""
+    name = "initial.rates[0]" if scene is RODRIGUES else "orbit.velocity[1]"
+    s = study(scene=scene, parameters={name: members})
     result = run_sweep(s, workers=2)
-    assert result.metadata["paths"] == {PATH_RUN: 2}
-    assert "rebasings" in result.metadata["why"][PATH_RUN]
+    assert result.metadata["paths"] == {PATH_LANES: 3}
     for i, values in enumerate(s.members()):
         alone = ch.run(s.member_scene(i, values))
-        for name in alone.conserved:
-            np.testing.assert_array_equal(result.drift[name][i], drift_row(alone, name))
+        assert result.status[i] == OK and result.steps[i] == alone.counters["steps"]
+        for name_ in alone.conserved:
+            np.testing.assert_allclose(result.drift[name_][i], drift_row(alone, name_), atol=1e-14)
         assert result.final_names == tuple(alone.variables)
-        np.testing.assert_array_equal(
-            result.final_state[i], [v[-1] for v in alone.variables.values()]
-        )
+        expected = np.array([v[-1] for v in alone.variables.values()], dtype=float)
+        np.testing.assert_allclose(result.final_state[i], expected, rtol=1e-12, atol=1e-13)
+        for event, log in alone.events.items():
+            assert result.events[event][i] == len(log)
+    from cayley_heyoka.sweep import layout_of, propagate_members
+
+    layout = layout_of(s)
+    order = [2, 0, 1]
+    part = propagate_members(s, [(i, s.members()[i]) for i in order], layout, threads=1)
+    for row, i in enumerate(order):
+        assert part.steps[row] == result.steps[i]
+        np.testing.assert_array_equal(part.final[row], result.final_state[i])
 
 
 def test_the_file_has_the_documented_layout(body_sweep):
