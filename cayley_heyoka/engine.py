@@ -36,7 +36,7 @@ import numpy as np
 
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
-from .model import Model
+from .model import Model, own_terminal
 from .precision import Precision, exact_fraction
 from .result import EventLog, Result, versions
 from .scene import IntegratorOptions, Scene
@@ -278,19 +278,17 @@ INTERRUPTED = -2
 def model_of(scene: Scene) -> Model:
     """``scene``'s model, built once per scene object while it lives.
 
-    Running one scene again (a benchmark, a notebook cell) then costs no build. A model whose
-    terminal-event handlers keep state of their own between calls (``checkpoint``, see
-    :class:`~cayley_heyoka.model.TerminalSpec`) is built anew for every run.
+    Running one scene again (a benchmark, a notebook cell) then costs no build. (Each run
+    takes its own copies of terminal-event handlers that keep state: :func:`own_terminal`.)
     """
     key = id(scene)
     held = _MODELS.get(key)
     if held is not None and held[0]() is scene:
         return held[1]
     model = FAMILIES[scene.family].build(scene)
-    if not any(hasattr(spec.handle, "checkpoint") for spec in model.terminal):
-        if len(_MODELS) >= _MODELS_HELD:
-            _MODELS.pop(next(iter(_MODELS)))
-        _MODELS[key] = (weakref.ref(scene), model)
+    if len(_MODELS) >= _MODELS_HELD:
+        _MODELS.pop(next(iter(_MODELS)))
+    _MODELS[key] = (weakref.ref(scene), model)
     return model
 
 
@@ -365,6 +363,7 @@ class Propagation:
         self._keep = keep
         self._states: list[np.ndarray] = []
         self._pars_rows: list[np.ndarray] = []
+        self.terminal = own_terminal(model.terminal)
         self.counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
         self.status, self.message = 0, "every output time was reached"
         self._stopped_at: tuple | None = None
@@ -418,7 +417,7 @@ class Propagation:
         return state, pars
 
     def _propagate(self, until: Any, end: int, budget: int, states: list, pars_rows: list) -> None:
-        ta, prec, grid, model = self._ta, self.precision, self.grid, self.model
+        ta, prec, grid = self._ta, self.precision, self.grid
         # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
         # ends a step there. So after a terminal event the grid is resumed from the current
         # time; propagate_until to the next output would end a step at each output reached
@@ -480,8 +479,8 @@ class Propagation:
             if outcome == hy.taylor_outcome.cb_stop and self._signals.received:
                 continue  # reported at the top of the loop
             self._span, self._since_event = 2 * self._since_event + RESUME_SPAN, 0
-            if -len(model.terminal) <= code <= -1:
-                self._terminal(model.terminal[-code - 1])
+            if -len(self.terminal) <= code <= -1:
+                self._terminal(self.terminal[-code - 1])
                 continue
             self.status = -1
             if outcome == hy.taylor_outcome.err_nf_state:
@@ -589,7 +588,7 @@ class Propagation:
             ],
             "handlers": [
                 spec.handle.checkpoint() if hasattr(spec.handle, "checkpoint") else None
-                for spec in self.model.terminal
+                for spec in self.terminal
             ],
         }
 
@@ -609,7 +608,7 @@ class Propagation:
         recorded = ta.nt_events if self.model.events else []
         if len(snapshot["events"]) != len(recorded):
             raise ValueError("the snapshot is of a scene with other events")
-        for spec, value in zip(self.model.terminal, snapshot["handlers"], strict=True):
+        for spec, value in zip(self.terminal, snapshot["handlers"], strict=True):
             if value is not None:
                 spec.handle.resume(value)
         for ev, (times, directions) in zip(recorded, snapshot["events"], strict=True):

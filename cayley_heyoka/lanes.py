@@ -40,7 +40,7 @@ import heyoka as hy
 import numpy as np
 
 from . import engine
-from .model import Model, TerminalSpec
+from .model import Model, TerminalSpec, own_terminal
 from .precision import Precision
 from .result import EventLog
 from .scene import IntegratorOptions
@@ -250,18 +250,13 @@ class _LaneRecorder:
 
 
 class _Copies:
-    """Every member's copy of shared terminal events (a handler may keep state of its own)."""
+    """Every member's own copy of shared terminal events (:func:`own_terminal`)."""
 
     def __init__(self, specs: Sequence[TerminalSpec]) -> None:
         self.specs = specs
 
     def __getitem__(self, index: int) -> list[TerminalSpec]:
-        return [
-            TerminalSpec(s.expression, s.direction, copy.deepcopy(s.handle), s.counter, s.records)
-            if hasattr(s.handle, "checkpoint")
-            else s
-            for s in self.specs
-        ]
+        return own_terminal(self.specs)
 
 
 class _LaneView:

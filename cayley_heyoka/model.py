@@ -12,6 +12,7 @@ built in the target precision from its decimal text.
 
 from __future__ import annotations
 
+import copy
 import functools
 import pickle
 from collections.abc import Callable, Sequence
@@ -107,6 +108,17 @@ class TerminalSpec:
     handle: Callable[[Any, Any], str | None]
     counter: str
     records: EventSpec | None = None
+
+
+def own_terminal(specs: Sequence[TerminalSpec]) -> list[TerminalSpec]:
+    """``specs`` for one run: a handler that keeps state of its own between calls
+    (``checkpoint``) is copied, so that runs of one model never share that state."""
+    return [
+        TerminalSpec(s.expression, s.direction, copy.deepcopy(s.handle), s.counter, s.records)
+        if hasattr(s.handle, "checkpoint")
+        else s
+        for s in specs
+    ]
 
 
 @dataclass
