@@ -16,15 +16,18 @@ differently) and do not depend on the other members, their order, the lanes or t
   (:class:`cayley_heyoka.engine.Propagation`). The batch call is rectangular, so a lane with
   fewer points than the longest column gets unused points inserted between its first two (only
   a call's last point ends a step);
-* a lane that stops (a non-finite state, its step budget spent) stops the batch call; the other
-  lanes then stand at the end of a whole step and resume from there with the rest of their
-  call — the same steps as if it had gone on;
+* members usually run a batch at a time in one call over the whole grid (the engine's first
+  call); a batch in which a lane stops short is run again lane by lane, below;
+* lane by lane, a lane that stops (a terminal event, a non-finite state, its step budget)
+  stops the batch call; the other lanes then stand at the end of a whole step and resume from
+  there with the rest of their call — the same steps as if it had gone on. A terminal event's
+  handler acts on a view of its lane (:class:`_LaneView`) and the member's own parameters, as
+  on a scalar integrator; members with terminal events always run this way, a lane given the
+  next member as soon as its own is done;
 * a lane with no member left follows a copy of a busy lane (re-copied before every call, its
   results unused), so that it never steps anywhere a member does not.
 
-Members with terminal events (handlers acting between steps) are not run here: each would stop
-every lane at each of its events (a Rodrigues chart re-bases every few steps). Double precision
-only (heyoka's batch integrators).
+Double precision only (heyoka's batch integrators).
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from __future__ import annotations
 import copy
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,10 +53,11 @@ from .scene import IntegratorOptions
 class LaneResult:
     """One member's integration: what :class:`cayley_heyoka.Result` is made of.
 
-    ``states`` and ``pars`` hold one row per output time reached (the whole parameter vector
-    at each); ``status`` is 0 when every output time was reached, -1 otherwise, with
-    ``message`` saying why (``nonfinite``: the state became non-finite); ``counters["steps"]``
-    the Taylor steps taken; ``time`` the time reached.
+    ``states`` holds one row per output time reached, ``pars`` the member's whole parameter
+    vector (one per row when terminal-event handlers change it); ``status`` is 0 when every
+    output time was reached, -1 otherwise, with ``message`` saying why (``nonfinite``: the state
+    became non-finite); ``counters`` the Taylor steps and terminal-event tallies; ``time`` the
+    time reached.
     """
 
     states: np.ndarray
@@ -259,6 +263,23 @@ class _Copies:
         return own_terminal(self.specs)
 
 
+class _Refilled:
+    """Members one at a time from ``next_block``'s batches."""
+
+    def __init__(self, next_block: Callable[[], list[int]]) -> None:
+        self.next_block, self.buffer = next_block, iter(())
+
+    def __iter__(self) -> _Refilled:
+        return self
+
+    def __next__(self) -> int:
+        index = next(self.buffer, None)
+        if index is None:
+            self.buffer = iter(self.next_block())
+            index = next(self.buffer)  # StopIteration once every member is taken
+        return index
+
+
 class _LaneView:
     """One lane of a batch integrator, as a terminal-event handler sees an integrator."""
 
@@ -316,12 +337,15 @@ class _Lanes:
         lane (:meth:`_lane_by_lane`), with the same bits up to its stop. Members with terminal
         events run lane by lane from the start (each event stops the call)."""
         self.initial, self.pars, self.terminal = initial, pars, terminal
+        if self.model.terminal:
+            self._lane_by_lane(_Refilled(self.next_block))
+            return
         while not (self.cancel is not None and self.cancel.is_set()):
             block = self.next_block()
             if not block:
                 return
-            if self.model.terminal or not self._at_once(block):
-                self._lane_by_lane(block)
+            if not self._at_once(block):
+                self._lane_by_lane(iter(block))
 
     def _at_once(self, block: list[int]) -> bool:
         """Integrate ``block`` in one call over the grid; False if a lane did not reach its
@@ -368,11 +392,10 @@ class _Lanes:
             )
         return True
 
-    def _lane_by_lane(self, block: list[int]) -> None:
-        """Integrate ``block`` lane by lane on the engine's schedule of calls (see the module
+    def _lane_by_lane(self, members: Iterator[int]) -> None:
+        """Integrate ``members`` lane by lane on the engine's schedule of calls (see the module
         docstring), each lane given the next of them when its own is done."""
-        pending = iter(block)
-        self._next = lambda: next(pending, None)
+        self._next = lambda: next(members, None)
         for rec in self.recorders:
             rec.clear()
         for j in range(self.width):
