@@ -309,16 +309,22 @@ def _lanes(
     grid = np.array([start, end], dtype=float)
     t0 = time.perf_counter()
     with engine.quiet_heyoka():
-        runs = lanes.propagate_members(
-            model, options, grid, states, np.repeat(pars[None, :], len(states), axis=0), workers
+        finals = lanes.propagate_members(
+            model,
+            options,
+            grid,
+            states,
+            np.repeat(pars[None, :], len(states), axis=0),
+            workers,
+            final_only=True,
         )
     wall = time.perf_counter() - t0
-    for i, run in enumerate(runs):
-        if run.status != 0:
-            outcome = hy.taylor_outcome.err_nf_state if run.nonfinite else run.message
-            raise _failure(i, run.time, outcome)
-    out = np.array([run.states[-1] for run in runs])
-    steps = np.array([run.counters["steps"] for run in runs], dtype=np.int64)
+    if finals.failed:
+        i = min(finals.failed)
+        run = finals.failed[i]
+        why = hy.taylor_outcome.err_nf_state if run.nonfinite else run.message
+        raise _failure(i, run.time, why)
+    out, steps = finals.states, finals.steps
     used = max(1, min(workers, -(-len(states) // batch.width)))
     seconds = 0.0 if cached else batch.compile_seconds
     return EnsembleResult(

@@ -71,6 +71,69 @@ class LaneResult:
 
 
 @dataclass
+class Finals:
+    """What :func:`propagate_members` keeps with ``final_only``: each member's last state.
+
+    ``failed`` maps a member that did not reach the last output time to its
+    :class:`LaneResult` (its message, the time it reached).
+    """
+
+    states: np.ndarray
+    steps: np.ndarray
+    failed: dict[int, LaneResult]
+
+
+class _Everything:
+    """Every member's :class:`LaneResult`."""
+
+    def __init__(self, members: int, model: Model) -> None:
+        self.results: list[LaneResult | None] = [None] * members
+        self.model = model
+
+    def put(self, index: int, result: LaneResult) -> None:
+        self.results[index] = result
+
+    def block(self, block, out, res, recorded, pars, end) -> None:
+        for j, index in enumerate(block):
+            events = recorded(j)
+            self.results[index] = LaneResult(
+                out[:, :, j].copy(),
+                pars[index],
+                0,
+                "every output time was reached",
+                {"steps": int(res[j][3])},
+                engine.logs_of(self.model, events, _DOUBLE, None) if events else {},
+                float(end),
+                False,
+            )
+
+    def value(self) -> list[LaneResult]:
+        return self.results  # type: ignore[return-value]
+
+
+class _Finals:
+    """Only each member's last state and steps (ensembles: one vectorised copy a batch)."""
+
+    def __init__(self, members: int, dim: int) -> None:
+        self.finals = Finals(np.full((members, dim), np.nan), np.zeros(members, np.int64), {})
+
+    def put(self, index: int, result: LaneResult) -> None:
+        self.finals.steps[index] = result.counters["steps"]
+        if result.status == 0:
+            self.finals.states[index] = result.states[-1]
+        else:
+            self.finals.failed[index] = result
+
+    def block(self, block, out, res, recorded, pars, end) -> None:
+        n = len(block)
+        self.finals.states[block[0] : block[0] + n] = out[-1, :, :n].T
+        self.finals.steps[block[0] : block[0] + n] = [r[3] for r in res[:n]]
+
+    def value(self) -> Finals:
+        return self.finals
+
+
+@dataclass
 class CompiledBatch:
     """A batch integrator template for one model structure, and spares to reuse."""
 
@@ -157,7 +220,8 @@ def propagate_members(
     threads: int = 1,
     cancel: threading.Event | None = None,
     terminal: Sequence[Sequence[TerminalSpec]] | None = None,
-) -> list[LaneResult]:
+    final_only: bool = False,
+) -> list[LaneResult] | Finals:
     """Integrate members of ``model``'s structure over ``grid``, lanes at a time.
 
     Parameters
@@ -179,17 +243,19 @@ def propagate_members(
     terminal
         Each member's terminal events (its own model's, whose handlers may keep state of their
         own); default: copies of ``model``'s for every member.
+    final_only
+        Keep only each member's last state (:class:`Finals`).
 
     Returns
     -------
-    list of LaneResult
+    list of LaneResult, or Finals
         In the order of the members.
     """
     compiled, _ = compile_batch(model, options)
     members = len(initial)
     if terminal is None:
         terminal = _Copies(model.terminal)
-    results: list[LaneResult | None] = [None] * members
+    results = _Finals(members, len(model.system)) if final_only else _Everything(members, model)
     starts = iter(range(0, members, compiled.width))
     lock = threading.Lock()
 
@@ -226,7 +292,7 @@ def propagate_members(
             t.join()
         if errors:
             raise errors[0]
-    return results  # type: ignore[return-value]
+    return results.value()
 
 
 # ---------------------------------------------------------------------- internals
@@ -378,18 +444,10 @@ class _Lanes:
         done = hy.taylor_outcome.time_limit
         if any(res[j][0] != done or times[j] != end for j in range(len(block))):
             return False
-        for j, index in enumerate(block):
-            recorded = [rec.take(j) for rec in self.recorders]
-            self.results[index] = LaneResult(
-                out[:, :, j].copy(),
-                self.pars[index],
-                0,
-                "every output time was reached",
-                {"steps": int(res[j][3])},
-                engine.logs_of(self.model, recorded, _DOUBLE, None) if recorded else {},
-                float(end),
-                False,
-            )
+        recorders = self.recorders
+        self.results.block(
+            block, out, res, lambda j: [rec.take(j) for rec in recorders], self.pars, end
+        )
         return True
 
     def _lane_by_lane(self, members: Iterator[int]) -> None:
@@ -566,9 +624,10 @@ class _Lanes:
             pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
         recorded = list(zip(m.event_times, m.event_directions, strict=True))
         events = engine.logs_of(self.model, recorded, _DOUBLE, m.stopped_at)
-        self.results[m.index] = LaneResult(
+        result = LaneResult(
             states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
         )
+        self.results.put(m.index, result)
         self._assign(j)
 
 
