@@ -38,7 +38,7 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka import engine
+from cayley_heyoka import engine, lanes
 from cayley_heyoka import ensemble as ens
 from cayley_heyoka.families import FAMILIES
 
@@ -587,7 +587,7 @@ def _heyoka_ensemble(system: System, X: np.ndarray, batch: bool) -> tuple[np.nda
     10⁵ integrators at once."""
     model = FAMILIES[system.scene.family].build(system.scene)
     if batch:
-        template, _ = ens._batch_template(model, system.scene.integrator)
+        template = lanes.compile_batch(model, system.scene.integrator)[0].integrator
         width = template.batch_size
     else:
         template = engine.compile_model(model, system.scene.integrator)[0].integrator
