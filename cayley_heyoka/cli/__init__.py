@@ -70,6 +70,9 @@ def compiling() -> Iterator[None]:
     Entered by the command, not by :func:`main`: the engine imports heyoka, which the commands
     that do not integrate (and ``--help``) never load.
     """
+    if threading.current_thread() is not threading.main_thread():
+        yield  # the signals are the main thread's (and the engine's switch is process-wide)
+        return
     from ..engine import signals_end_compilation
 
     with signals_end_compilation():

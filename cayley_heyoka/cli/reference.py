@@ -6,9 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from . import add_progress, compiling, show_progress
+
+if TYPE_CHECKING:
+    from ..precision import Precision
+    from ..scene import Scene
 
 # The workflow's defaults and choices, written here so that building the parser imports
 # nothing of it; tests/test_cli_imports.py holds them equal to reference_run's.
@@ -123,7 +127,7 @@ def _reference(args: argparse.Namespace) -> int:
     return 0 if outcome.certified else 1
 
 
-def _parse_precision(text: str | None) -> Any:
+def _parse_precision(text: str | None) -> Precision | None:
     """``--precision`` as a :class:`~cayley_heyoka.precision.Precision`, or None."""
     from ..errors import SceneError
     from ..precision import Precision
@@ -140,7 +144,7 @@ def _parse_precision(text: str | None) -> Any:
 class _Bars:
     """One progress bar per run."""
 
-    def __init__(self, scene: Any) -> None:
+    def __init__(self, scene: Scene) -> None:
         from ..precision import Precision
 
         grid = scene.output.time_grid(Precision())
