@@ -25,8 +25,9 @@ import signal
 import threading
 import time
 import warnings
+import weakref
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
@@ -64,11 +65,44 @@ def use_compact_mode(model: Model, options: IntegratorOptions) -> bool:
 
 @dataclass
 class Compiled:
-    """A template integrator and the evaluator of outputs and monitors for one model structure."""
+    """A template integrator and the evaluator of outputs and monitors for one model structure.
+
+    ``spare`` holds integrators that finished runs handed back (:meth:`take`, :meth:`give`):
+    resetting one costs microseconds where copying the template cost 0.3–1 ms, most of a short
+    run.
+    """
 
     integrator: Any
     evaluator: Any
     compile_seconds: float
+    spare: list[Any] = field(default_factory=list)
+
+    def take(self) -> Any:
+        """An integrator of this structure that no one else is using, its event records
+        empty and its cooldowns reset; time, state and parameters are the caller's to set.
+
+        A reused integrator steps as a copy of the template does: heyoka chooses each step from
+        the current Taylor coefficients alone, and carries nothing else from a propagation to
+        the next but event cooldowns and the records our callbacks keep (both reset here).
+        """
+        try:
+            ta = self.spare.pop()  # atomic: threads never get the same one
+        except IndexError:
+            return copy.deepcopy(self.integrator)
+        if ta.with_events:
+            for ev in ta.nt_events:
+                ev.callback.clear()
+            ta.reset_cooldowns()
+        return ta
+
+    def give(self, ta: Any) -> None:
+        """Hand back an integrator from :meth:`take` that its run no longer uses."""
+        if len(self.spare) < _SPARE:
+            self.spare.append(ta)
+
+
+#: Integrators kept for reuse per compiled structure (one per thread that runs it at once).
+_SPARE = 8
 
 
 _CACHE: dict[str, Compiled] = {}
@@ -110,7 +144,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
                 f"events.{e.name}.expression",
                 f"is constant ({e.expression}): an event needs the state or t to cross zero",
             )
-    with _signals_end_process(), _quiet_heyoka():
+    with _signals_end_process(), quiet_heyoka():
         compiled = _compile(model, options)
     _CACHE[key] = compiled
     return compiled, False
@@ -152,7 +186,7 @@ def _signals_end_process() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def _quiet_heyoka() -> Iterator[None]:
+def quiet_heyoka() -> Iterator[None]:
     """heyoka's ``[warning]`` log lines off (their cases are reported as errors of ours)."""
     hy.set_logger_level_error()
     try:
@@ -223,12 +257,15 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     """
     propagation = Propagation(scene, progress)
     try:
-        propagation.advance()
-    except KeyboardInterrupt:
-        if propagation.status != INTERRUPTED:
-            raise
-        raise Interrupted(propagation.message, propagation.result()) from None
-    result = propagation.result()
+        try:
+            propagation.advance()
+        except KeyboardInterrupt:
+            if propagation.status != INTERRUPTED:
+                raise
+            raise Interrupted(propagation.message, propagation.result()) from None
+        result = propagation.result()
+    finally:
+        propagation.release()
     if result.status != 0:
         raise IntegrationError(result.message, result)
     return result
@@ -238,6 +275,30 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
 INTERRUPTED = -2
 
 
+def model_of(scene: Scene) -> Model:
+    """``scene``'s model, built once per scene object while it lives.
+
+    Running one scene again (a benchmark, a notebook cell) then costs no build. A model whose
+    terminal-event handlers keep state of their own between calls (``checkpoint``, see
+    :class:`~cayley_heyoka.model.TerminalSpec`) is built anew for every run.
+    """
+    key = id(scene)
+    held = _MODELS.get(key)
+    if held is not None and held[0]() is scene:
+        return held[1]
+    model = FAMILIES[scene.family].build(scene)
+    if not any(hasattr(spec.handle, "checkpoint") for spec in model.terminal):
+        if len(_MODELS) >= _MODELS_HELD:
+            _MODELS.pop(next(iter(_MODELS)))
+        _MODELS[key] = (weakref.ref(scene), model)
+    return model
+
+
+#: Models of the scenes run last (by object: a scene is immutable once validated).
+_MODELS: dict[int, tuple[weakref.ref, Model]] = {}
+_MODELS_HELD = 64
+
+
 def preflight(scene: Scene) -> None:
     """Raise the :class:`SceneError` that :func:`run` would raise before integrating, if any.
 
@@ -245,7 +306,7 @@ def preflight(scene: Scene) -> None:
     equations): the same refusals as a run. Compiles the scene's integrator (or takes it from
     the cache, where a later :func:`run` finds it).
     """
-    Propagation(scene)
+    Propagation(scene).release()
 
 
 class Propagation:
@@ -275,7 +336,7 @@ class Propagation:
         # Overflows while building are not reported by numpy: the checks below name them.
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            self.model = model = FAMILIES[scene.family].build(scene)
+            self.model = model = model_of(scene)
             initial = prec.array(model.initial_state)
             # The whole parameter vector (outputs may use parameters the equations do not);
             # the integrator holds its leading part, copied back whenever a handler changes it.
@@ -345,7 +406,7 @@ class Propagation:
         pars_rows: list[np.ndarray] = []
         budget = self.scene.integrator.max_steps
         try:
-            with self._signals, _quiet_heyoka():
+            with self._signals, quiet_heyoka():
                 self._propagate(until, end, budget, states, pars_rows)
         finally:
             width = (len(model.system), len(model.pars))
@@ -418,7 +479,7 @@ class Propagation:
                 break
             if outcome == hy.taylor_outcome.cb_stop and self._signals.received:
                 continue  # reported at the top of the loop
-            self._span, self._since_event = 2 * self._since_event + _RESUME_SPAN, 0
+            self._span, self._since_event = 2 * self._since_event + RESUME_SPAN, 0
             if -len(model.terminal) <= code <= -1:
                 self._terminal(model.terminal[-code - 1])
                 continue
@@ -435,14 +496,22 @@ class Propagation:
                 self.message = f"stopped at t = {ta.time} with outcome {outcome}"
 
     def _fresh_integrator(self) -> Any:
-        ta = copy.deepcopy(self.compiled.integrator)
+        ta = self.compiled.take()
         ta.time = self.grid[0]
         ta.state[:] = self._initial
         return ta
 
+    def release(self) -> None:
+        """Hand the integrator back for reuse by later runs; this propagation is done with it
+        (its :meth:`result` taken)."""
+        if self._ta is not None:
+            self.compiled.give(self._ta)
+            self._ta = None
+
     def _restart(self) -> Any:
-        """Back to the first output time with a new copy of the template integrator (its
-        event recorders empty); nothing was recorded or handled yet."""
+        """Back to the first output time with the integrator reset (its event recorders
+        empty); nothing was recorded or handled yet."""
+        self.compiled.give(self._ta)
         self._ta = ta = self._fresh_integrator()
         ta.pars[:] = self._pars[: self._held]
         self.counters["steps"] = 0
@@ -594,7 +663,7 @@ _PROBE_MIN_STEPS = 16
 _ESTIMATE_MARGIN = 10
 
 #: Output times added to a propagate_grid call after a terminal event (see ``run``).
-_RESUME_SPAN = 8
+RESUME_SPAN = 8
 
 
 def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:
@@ -622,6 +691,10 @@ class _Recorder:
     def __call__(self, ta: Any, t: Any, d_sgn: int) -> None:
         self.times.append(t)
         self.directions.append(int(d_sgn))
+
+    def clear(self) -> None:
+        self.times.clear()
+        self.directions.clear()
 
 
 class _ProgressCallback:
@@ -730,6 +803,11 @@ def first_nonfinite(
     return k, f"the {kind} {name} became non-finite at t = {times[k]}; results kept up to there"
 
 
+def event_direction(spec: Any) -> Any:
+    """heyoka's direction of an :class:`EventSpec` or :class:`TerminalSpec`."""
+    return _direction(spec.direction)
+
+
 def _direction(d: int) -> Any:
     return {
         0: hy.event_direction.any,
@@ -742,8 +820,7 @@ def cache_key(model: Model, options: IntegratorOptions) -> str:
     """The key of ``model``'s compiled code: equal keys share one compiled integrator."""
     text = "\n".join(
         [
-            model.structure_key(),
-            model.output_key(),
+            model.code_key,
             options.precision.name,
             str(options.tolerance),
             str(options.compact_mode),
@@ -814,13 +891,21 @@ def event_logs(
     model: Model, ta: Any, prec: Precision, stopped_at: tuple | None
 ) -> dict[str, EventLog]:
     """The occurrences recorded by ``ta``'s event callbacks (and a terminal stop), by name."""
-    gathered: dict[str, list[tuple[Any, int, str]]] = {}
     recorded = ta.nt_events if model.events else []
-    for spec, ev in zip(model.events, recorded, strict=True):
-        rec = ev.callback
+    return logs_of(
+        model, [(ev.callback.times, ev.callback.directions) for ev in recorded], prec, stopped_at
+    )
+
+
+def logs_of(
+    model: Model, recorded: list[tuple[list, list]], prec: Precision, stopped_at: tuple | None
+) -> dict[str, EventLog]:
+    """The event logs of ``model`` from each event's recorded (times, directions)."""
+    gathered: dict[str, list[tuple[Any, int, str]]] = {}
+    for spec, (times, directions) in zip(model.events, recorded, strict=True):
         gathered.setdefault(spec.name, [])
         gathered[spec.name] += [
-            (t, d, spec.label_for(d)) for t, d in zip(rec.times, rec.directions, strict=True)
+            (t, d, spec.label_for(d)) for t, d in zip(times, directions, strict=True)
         ]
     if stopped_at is not None:
         spec, t, d = stopped_at

@@ -25,8 +25,10 @@ Modes (measured in validation/BENCHMARKS.md, section "Set-up cost and ensembles"
 
 ``"batch"``
     heyoka's batch integrator: ``heyoka.recommended_simd_size()`` members per SIMD lane set,
-    each lane with its own step size; one batch integrator per worker thread. Double
-    precision only.
+    each lane with its own step size; one batch integrator per worker thread, a lane handed the
+    next member as soon as its own is done (:mod:`.lanes`, the path sweeps take too). Each
+    member takes the serial mode's steps; its state differs by a few ulps (SIMD rounding).
+    Double precision only.
 ``"threads"``
     the scalar integrator, one copy per worker thread, each sweeping its share of members.
 ``"serial"``
@@ -44,7 +46,6 @@ costs no recompilation.
 from __future__ import annotations
 
 import copy
-import hashlib
 import os
 import time
 from collections.abc import Sequence
@@ -56,7 +57,7 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import engine
+from . import engine, lanes
 from .families import FAMILIES
 from .model import Model
 from .precision import Number, Precision
@@ -226,10 +227,9 @@ def propagate_ensemble(
     workers = 1 if mode == "serial" else (workers or os.cpu_count() or 1)
 
     if mode == "batch":
-        template, compile_seconds = _batch_template(model, options)
-    else:
-        compiled, cached = engine.compile_model(model, options)
-        template, compile_seconds = compiled.integrator, 0.0 if cached else compiled.compile_seconds
+        return _lanes(model, options, states, start, end, workers)
+    compiled, cached = engine.compile_model(model, options)
+    template, compile_seconds = compiled.integrator, 0.0 if cached else compiled.compile_seconds
     pars = prec.array(model.pars.values[: model.integrator_parameters()])
     limit: dict[str, Any] = {"max_steps": options.max_steps}  # the step budget, per member
     if options.max_step is not None:
@@ -238,12 +238,8 @@ def propagate_ensemble(
     members = len(states)
     out = np.empty_like(states)
     steps = np.zeros(members, dtype=np.int64)
-    sweep = _BatchSweep if mode == "batch" else _ScalarSweep
-    job = sweep(states, out, steps, start, end, pars, limit)
-    width = job.width
-    # Tasks are whole batches, so that no two workers write one batch's padding.
-    chunk = _CHUNK if width == 1 else width * max(1, _CHUNK // width)
-    tasks = [range(i, min(i + chunk, members)) for i in range(0, members, chunk)]
+    job = _ScalarSweep(states, out, steps, start, end, pars, limit)
+    tasks = [range(i, min(i + _CHUNK, members)) for i in range(0, members, _CHUNK)]
     workers = min(workers, len(tasks))
 
     t0 = time.perf_counter()
@@ -271,12 +267,9 @@ def propagate_ensemble(
     return EnsembleResult(names, out, steps, start, end, mode, workers, compile_seconds, wall)
 
 
-_BATCH_CACHE: dict[str, tuple[Any, float]] = {}
-
-
 def clear_cache() -> None:
     """Forget the compiled batch integrators (scalar ones live in :mod:`.engine`'s cache)."""
-    _BATCH_CACHE.clear()
+    lanes.clear_cache()
 
 
 # ---------------------------------------------------------------------- internals
@@ -307,42 +300,30 @@ def _initial_states(values: Any, names: Sequence[str], prec: Precision) -> np.nd
     return array
 
 
-def _batch_template(model: Model, options: IntegratorOptions) -> tuple[Any, float]:
-    """A compiled batch integrator for the model's structure (cached like the engine's)."""
-    size = hy.recommended_simd_size()
-    compact = engine.use_compact_mode(model, options)
-    key = hashlib.sha256(
-        "\n".join(
-            [
-                model.structure_key(),
-                str(options.tolerance),
-                str(compact),
-                str(options.high_accuracy),
-                str(size),
-            ]
-        ).encode()
-    ).hexdigest()
-    hit = _BATCH_CACHE.get(key)
-    if hit is not None:
-        return hit[0], 0.0
+def _lanes(
+    model: Model, options: IntegratorOptions, states: np.ndarray, start: Any, end: Any, workers: int
+) -> EnsembleResult:
+    """Batch mode: the members in SIMD lanes (:mod:`.lanes`, the sweeps' path)."""
+    batch, cached = lanes.compile_batch(model, options)
+    pars = np.asarray(model.pars.values, dtype=float)
+    grid = np.array([start, end], dtype=float)
     t0 = time.perf_counter()
-    prec = options.precision
-    state = np.repeat(prec.array(model.initial_state)[:, None], size, axis=1)
-    pars = prec.array(model.pars.values[: model.integrator_parameters()])
-    extra = {}
-    if options.tolerance is not None:
-        extra["tol"] = prec.number(options.tolerance)
-    ta = hy.taylor_adaptive_batch(
-        model.system,
-        state,
-        pars=np.repeat(pars[:, None], size, axis=1),
-        compact_mode=compact,
-        high_accuracy=options.high_accuracy,
-        **extra,
+    with engine.quiet_heyoka():
+        runs = lanes.propagate_members(
+            model, options, grid, states, np.repeat(pars[None, :], len(states), axis=0), workers
+        )
+    wall = time.perf_counter() - t0
+    for i, run in enumerate(runs):
+        if run.status != 0:
+            outcome = hy.taylor_outcome.err_nf_state if run.nonfinite else run.message
+            raise _failure(i, run.time, outcome)
+    out = np.array([run.states[-1] for run in runs])
+    steps = np.array([run.counters["steps"] for run in runs], dtype=np.int64)
+    used = max(1, min(workers, -(-len(states) // batch.width)))
+    seconds = 0.0 if cached else batch.compile_seconds
+    return EnsembleResult(
+        tuple(model.state_names), out, steps, start, end, "batch", used, seconds, wall
     )
-    seconds = time.perf_counter() - t0
-    _BATCH_CACHE[key] = (ta, seconds)
-    return ta, seconds
 
 
 class _ScalarSweep:
@@ -367,46 +348,11 @@ class _ScalarSweep:
         return None
 
 
-class _BatchSweep:
-    """Integrates members ``width`` at a time on a batch integrator (padding the last batch
-    with copies of its last member)."""
-
-    def __init__(self, states, out, steps, start, end, pars, limit) -> None:
-        self.states, self.out, self.steps = states, out, steps
-        self.start, self.end, self.pars, self.limit = start, end, pars, limit
-        self.width = hy.recommended_simd_size()
-
-    def __call__(self, ta: Any, members: range) -> EnsembleError | None:
-        ta.pars[:] = self.pars[:, None]
-        for lo in range(members.start, members.stop, self.width):
-            hi = min(lo + self.width, members.stop)
-            block = self.states[lo:hi]
-            if hi - lo < self.width:
-                block = np.vstack([block, np.repeat(block[-1:], self.width - (hi - lo), axis=0)])
-            ta.set_time(self.start)
-            ta.state[:] = block.T
-            ta.propagate_until(self.end, **self.limit)
-            results = ta.propagate_res
-            for j in range(hi - lo):
-                outcome, _, _, nsteps = results[j]
-                self.steps[lo + j] = nsteps
-            # A lane that fails stops the whole batch, the others short of t_end with another
-            # outcome: report the failing lane, not those it interrupted.
-            lanes = range(hi - lo)
-            bad = (
-                [j for j in lanes if results[j][0] == hy.taylor_outcome.err_nf_state]
-                or [j for j in lanes if results[j][0] != hy.taylor_outcome.time_limit]
-                or [j for j in lanes if ta.time[j] != self.end]
-            )
-            if bad:
-                return _failure(lo + bad[0], ta.time[bad[0]], results[bad[0]][0])
-            self.out[lo:hi] = ta.state[:, : hi - lo].T
-        return None
-
-
 def _failure(member: int, reached: Any, outcome: Any) -> EnsembleError:
     if outcome == hy.taylor_outcome.err_nf_state:
         why = "its state became non-finite"
+    elif isinstance(outcome, str):
+        why = f"it stopped ({outcome})"
     else:
         why = f"it stopped with outcome {outcome}"
     return EnsembleError(

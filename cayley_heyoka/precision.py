@@ -8,6 +8,8 @@ would carry the double rounding error of ``1.1`` into a quadruple-precision run;
 
 from __future__ import annotations
 
+import functools
+import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -168,6 +170,11 @@ class Precision:
             return value
         if self.kind == "quad" and isinstance(value, hy.real128):
             return value
+        if isinstance(value, str) and self.kind != "real":
+            return _from_text(self.kind, value)
+        return self._convert(value)
+
+    def _convert(self, value: Number) -> Any:
         text = decimal_text(value) if isinstance(value, str) else None
         if self.kind == "quad":
             return hy.real128(text if text is not None else _exact_text(value))
@@ -266,8 +273,7 @@ def exact_fraction(value: Number) -> Fraction:
     if isinstance(value, bool):
         raise TypeError(f"expected a number, got {value!r}")
     if isinstance(value, str):
-        mantissa, exponent = _decimal_parts(value)
-        return Fraction(mantissa) * Fraction(10) ** exponent
+        return _text_fraction(value)
     if isinstance(value, int) and abs(value) >= _INTEGER_LIMIT:
         # Not printed: Python refuses to print an integer of more than 4300 digits.
         raise ValueError(
@@ -291,6 +297,22 @@ def decimal_text(text: str) -> str:
     return f"{mantissa}e{exponent}"
 
 
+@functools.lru_cache(maxsize=4096)
+def _from_text(kind: str, text: str) -> Any:
+    # Double and real128 numbers are immutable: the base scene's text is converted once per
+    # sweep, not once per member. (heyoka's MPFR numbers are not cached: each carries its
+    # precision, and they are rarely the cost.)
+    return Precision(kind)._convert(text)
+
+
+@functools.lru_cache(maxsize=4096)
+def _text_fraction(text: str) -> Fraction:
+    # Scenes of a sweep repeat the base scene's text: parsed once (Fractions are immutable).
+    mantissa, exponent = _decimal_parts(text)
+    return Fraction(mantissa) * Fraction(10) ** exponent
+
+
+@functools.lru_cache(maxsize=4096)
 def _decimal_parts(text: str) -> tuple[int, int]:
     """(integer mantissa, decimal exponent) of decimal text, within the limits above."""
     m = _DECIMAL.fullmatch(text.strip())
@@ -378,6 +400,15 @@ def unit_length(values: Iterable[Number], tolerance: Fraction) -> tuple[bool, st
 
 def fraction_text(value: Fraction, precision: Precision) -> str:
     """Decimal text of a rational, with enough digits to round correctly in ``precision``."""
+    if precision.kind == "double":
+        # Python's int / int is correctly rounded; repr round-trips that double. Beyond
+        # double's range the decimal text below lets Precision.number refuse it by name.
+        try:
+            x = value.numerator / value.denominator
+        except OverflowError:
+            x = math.inf
+        if math.isfinite(x) and (x != 0) == (value != 0):
+            return repr(x)
     import mpmath
 
     with mpmath.workdps(precision.dps + 15):

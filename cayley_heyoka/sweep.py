@@ -12,9 +12,12 @@ docs/tutorials/sweeps.md).
 How members are integrated, on one machine (:func:`propagate_members`):
 
 * members are grouped by compiled structure (scenes differing only in numbers share code);
-* a group without terminal events goes through heyoka's ensemble propagation
+* a group without terminal events, in double precision, goes through heyoka's batch
+  integrators in SIMD lanes, one per thread (:mod:`.lanes`, which ``propagate_ensemble``
+  shares): the steps and events of :func:`cayley_heyoka.run`, its states to a few ulps;
+* in quad or multiprecision, through heyoka's ensemble propagation
   (``heyoka.ensemble_propagate_grid``, threads), each member's state, parameters and start time
-  set on a copy of the compiled integrator;
+  set on a copy of the compiled integrator (run()'s bits);
 * a group with terminal events (the Rodrigues chart's re-basing, the orbit's revolution count
   and equatorial stop, Encke's rectification) goes through :func:`cayley_heyoka.run`, since
   their handlers cannot run inside heyoka's ensemble;
@@ -27,6 +30,7 @@ processes and gathers the chunks into the one file.
 from __future__ import annotations
 
 import os
+import threading
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -62,6 +66,9 @@ from .sweep_result import (
 )
 
 #: How a member was integrated (the counts by path are in the file's metadata).
+PATH_LANES = "cayley_heyoka.lanes"
+#: Most members whose validated scenes a local sweep keeps between validating and running.
+_KEEP_SCENES = 2**16
 PATH_ENSEMBLE = "heyoka.ensemble_propagate_grid"
 PATH_RUN = "cayley_heyoka.run"
 
@@ -120,8 +127,14 @@ def run_sweep(
     """
     run = override_run(study.run, backend, scheduler, workers, chunk)
     members = study.members()
+    # Every member is validated before anything runs; the scenes are kept for the local
+    # backend when they fit in memory (~2.5 kB each), not validated a second time.
+    keep = run.backend == "local" and len(members) <= _KEEP_SCENES
+    scenes: list[Scene] | None = [] if keep else None
     for i, values in enumerate(members):
-        study.member_scene(i, values)
+        scene = study.member_scene(i, values)
+        if scenes is not None:
+            scenes.append(scene)
     layout = layout_of(study)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
@@ -153,8 +166,7 @@ def run_sweep(
             info["workers"] = threads
             size = run.chunk or DEFAULT_CHUNK
             info["chunk"] = size
-            for part in _split(indexed, size):
-                take(propagate_members(study, part, layout, threads))
+            _pipeline(study, indexed, layout, threads, size, scenes, take)
         else:
             from . import sweep_dask
 
@@ -181,7 +193,11 @@ def run_sweep(
 
 
 def propagate_members(
-    study: Study, members: Sequence[Member], layout: Layout, threads: int = 1
+    study: Study,
+    members: Sequence[Member],
+    layout: Layout,
+    threads: int = 1,
+    scenes: Sequence[Scene] | None = None,
 ) -> Chunk:
     """Integrate some members of a study on this machine (the local path, run by each Dask
     task too).
@@ -196,6 +212,8 @@ def propagate_members(
         The columns to fill (:func:`layout_of`).
     threads
         Threads for heyoka's ensemble propagation and for the members run one by one.
+    scenes
+        The members' validated scenes, if the caller has them (else validated here).
 
     Returns
     -------
@@ -204,6 +222,22 @@ def propagate_members(
         output time, a model that cannot be built) is marked ``FAILED`` with the reason; the
         others are unaffected.
     """
+    prepared = prepare_members(study, members, layout, scenes)
+    return integrate_members(prepared, layout, study.precision, threads)
+
+
+#: A chunk's rows and its members grouped by compiled structure: (row, scene, model).
+Prepared = tuple[Chunk, dict[str, list[tuple[int, Scene, Any]]]]
+
+
+def prepare_members(
+    study: Study,
+    members: Sequence[Member],
+    layout: Layout,
+    scenes: Sequence[Scene] | None = None,
+) -> Prepared:
+    """The first half of :func:`propagate_members`: each member's scene and model, grouped by
+    compiled structure (Python work, run while the previous chunk integrates)."""
     from .families import FAMILIES
 
     prec = study.precision
@@ -220,26 +254,80 @@ def propagate_members(
     groups: dict[str, list[tuple[int, Scene, Any]]] = {}
     for row, (index, values) in enumerate(members):
         try:
-            scene = study.member_scene(index, values)
+            scene = scenes[row] if scenes is not None else study.member_scene(index, values)
             model = FAMILIES[scene.family].build(scene)
         except Exception as exc:  # one member's bad numbers must not end the sweep
             part.message[row] = _reason(exc)
             continue
         groups.setdefault(_group_key(model, scene), []).append((row, scene, model))
+    return part, groups
+
+
+def integrate_members(
+    prepared: Prepared,
+    layout: Layout,
+    prec: Precision,
+    threads: int = 1,
+    cancel: threading.Event | None = None,
+) -> Chunk:
+    """The second half of :func:`propagate_members`: integrate the groups and fill the rows.
+
+    ``cancel``, once set, ends the lanes after their current call (the chunk is then
+    incomplete: the caller drops it).
+    """
+    part, groups = prepared
     for group in groups.values():
         terminal = group[0][2].terminal
         if terminal:
             counters = ", ".join(t.counter for t in terminal)
             part.why[PATH_RUN] = f"terminal events: {counters}"
             _run_group(group, part, layout, prec, threads)
-            part.paths[PATH_RUN] = part.paths.get(PATH_RUN, 0) + len(group)
+            path = PATH_RUN
+        elif prec.kind == "double":
+            _lanes_group(group, part, layout, prec, threads, cancel)
+            path = PATH_LANES
         else:
+            part.why[PATH_ENSEMBLE] = f"{prec.name}: heyoka's batch integrators are double only"
             _ensemble_group(group, part, layout, prec, threads)
-            part.paths[PATH_ENSEMBLE] = part.paths.get(PATH_ENSEMBLE, 0) + len(group)
+            path = PATH_ENSEMBLE
+        part.paths[path] = part.paths.get(path, 0) + len(group)
     return part
 
 
 # ---------------------------------------------------------------------- internals: running
+def _pipeline(
+    study: Study,
+    indexed: list,
+    layout: Layout,
+    threads: int,
+    size: int,
+    scenes: list[Scene] | None,
+    take: Callable[[Chunk], None],
+) -> None:
+    """Chunk by chunk, building the next chunk's models while the current one integrates:
+    heyoka steps without the GIL, so the Python work of one overlaps the stepping of the other.
+    An exception (Ctrl-C in ``take``'s progress) cancels the chunk in flight (dropped: its
+    members stay NOT_RUN) after its lanes' current call."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    prec = study.precision
+    cancel = threading.Event()
+    pending = None
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        try:
+            for part in _split(indexed, size):
+                given = [scenes[i] for i, _ in part] if scenes is not None else None
+                prepared = prepare_members(study, part, layout, given)
+                if pending is not None:
+                    take(pending.result())
+                pending = pool.submit(integrate_members, prepared, layout, prec, threads, cancel)
+            if pending is not None:
+                take(pending.result())
+        except BaseException:
+            cancel.set()
+            raise
+
+
 def _split(items: list, size: int) -> Iterator[list]:
     for lo in range(0, len(items), size):
         yield items[lo : lo + size]
@@ -323,6 +411,57 @@ def _run_group(
 
     with ThreadPoolExecutor(max_workers=max(1, min(threads, len(group)))) as pool:
         list(pool.map(one, group))
+
+
+def _lanes_group(
+    group: list[tuple[int, Scene, Any]],
+    part: Chunk,
+    layout: Layout,
+    prec: Precision,
+    threads: int,
+    cancel: threading.Event | None = None,
+) -> None:
+    """Members sharing compiled code, without terminal events, in double: batch lanes."""
+    from . import engine, lanes
+
+    _, scene0, model0 = group[0]
+    compiled, cached = engine.compile_model(model0, scene0.integrator)  # the outputs' evaluator
+    batch, batch_cached = lanes.compile_batch(model0, scene0.integrator)
+    part.compile_seconds += (0 if cached else compiled.compile_seconds) + (
+        0 if batch_cached else batch.compile_seconds
+    )
+    grid = scene0.output.time_grid(prec)
+    initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
+    pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
+    try:
+        with engine.quiet_heyoka():  # a member going non-finite is reported as such
+            runs = lanes.propagate_members(
+                model0, scene0.integrator, grid, initial, pars, threads, cancel
+            )
+    except Exception as exc:  # the whole call failed: every member of the group is marked
+        for row, _, _ in group:
+            part.message[row] = _reason(exc)
+        return
+    if cancel is not None and cancel.is_set():
+        return  # the chunk is dropped
+    for (row, _, model), run in zip(group, runs, strict=True):
+        reached = len(run.states)
+        values = engine.evaluate_outputs(
+            compiled, model, run.states, run.pars, grid[:reached], prec
+        )
+        complete = run.status == 0
+        part.message[row] = run.message
+        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
+            # As a lone run would: the member stops at its first non-finite output.
+            k, part.message[row] = bad
+            complete = False
+            values = {n: v[:k] for n, v in values.items()}
+        part.status[row] = OK if complete else FAILED
+        part.steps[row] = run.counters["steps"]
+        for name in layout.events:
+            log = run.events.get(name)
+            part.events[name][row] = len(log) if log is not None else 0
+        _record(part, row, layout, prec, values, model.conserved, complete)
 
 
 def _ensemble_group(

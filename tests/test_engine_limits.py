@@ -288,3 +288,32 @@ def test_a_signal_stops_a_run_without_progress_bar_or_terminal_events(tmp_path):
     assert proc.returncode == 130, err
     assert "interrupted (SIGINT)" in err
     assert "interrupted" in ch.load_result(out).message
+
+
+@pytest.mark.parametrize(
+    "build",
+    [lambda: _scene("double"), lambda: _scene("quad"), lambda: _orbit("cayley")],
+    ids=["heavy-top-double", "heavy-top-quad", "orbit-cayley"],
+)
+def test_a_reused_integrator_gives_the_bits_of_a_fresh_copy(build):
+    """Runs hand their integrator back for the next run of the structure (reset, not copied):
+    a run on a reused integrator — after a run that stopped midway on its step budget, with
+    events recorded and chart re-basings or revolutions handled — has the bits, events and
+    counters of a run on a fresh copy of the template."""
+    scene = build()
+    compiled = engine.Propagation(scene).compiled
+    compiled.spare.clear()
+    fresh = ch.run(scene)  # on a copy of the template (no spare yet)
+    budget = fresh.counters["steps"] // 3
+    stopped = scene.to_dict()
+    stopped["integrator"] = {**stopped.get("integrator", {}), "max_steps": budget}
+    with pytest.raises(IntegrationError):
+        ch.run(ch.Scene.from_dict(stopped))
+    assert len(compiled.spare) == 1  # the stopped run's integrator, handed back
+    again = ch.run(scene)
+    assert again.counters == fresh.counters and fresh.counters["steps"] > 50
+    _same(again, fresh)
+    assert fresh.events and set(again.events) == set(fresh.events)
+    for name, log in fresh.events.items():
+        prec = fresh.precision
+        assert np.array_equal(prec.to_text(log.time), prec.to_text(again.events[name].time))

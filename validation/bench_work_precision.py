@@ -833,10 +833,12 @@ def mpmath_point(case: Case, rc, t_end: float, dps: int, tol: float | None, ref)
 
 # ---------------------------------------------------------------------------- rendering
 def curves(case: Case) -> list[Curve]:
+    """Each method's (wall time, error) points: what a user waits for — our whole ``run()``
+    (model build, output evaluation), a peer's whole call."""
     by: dict[str, Curve] = {}
     for p in case.points:
         c = by.setdefault(p.method, Curve(p.method, [], [], []))
-        c.times.append(p.wall)
+        c.times.append(p.run_wall if p.run_wall is not None else p.wall)
         c.errors.append(p.error)
         c.settings.append(p.setting)
     return list(by.values())
@@ -892,8 +894,9 @@ def render(case: Case, figures: Path) -> str:
             m for m in methods if any(math.isfinite(r[1].get(m, math.nan)) for r in rows.values())
         ]
         lines += [
-            "Wall time at equal error over the reference method's (– : the method's sweep does "
-            "not reach that error):",
+            "Wall time of a whole run at equal error (ours: `run()` with its model build and "
+            "output evaluation; a peer: its whole call) over the reference method's (– : the "
+            "method's sweep does not reach that error):",
             "",
             "| error | relative to | " + " | ".join(shown) + " |",
             "|---|---|" + "---|" * len(shown),

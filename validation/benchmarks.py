@@ -23,7 +23,7 @@ sys.path.insert(0, str(HERE))
 from bench_common import machine  # noqa: E402
 from report_sections import write_section  # noqa: E402
 
-SECTIONS = ("work_precision", "ias15", "conservation", "setup")
+SECTIONS = ("users", "work_precision", "ias15", "conservation", "setup")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,451 @@
+"""Many members of one model structure, integrated SIMD lanes at a time (heyoka's batch mode).
+
+A sweep's members share compiled code and differ in their numbers (initial state, runtime
+parameters). heyoka's batch integrator advances ``heyoka.recommended_simd_size()`` of them at
+once, each lane with its own step size; :func:`propagate_members` keeps every lane busy,
+handing a lane the next member when its member is done, and runs one batch integrator per
+worker thread (heyoka releases the GIL while it steps).
+
+Each member takes the steps, records the events and counts that :func:`cayley_heyoka.run` of
+its scene does; its states differ from the scalar run's by a few ulps (SIMD arithmetic rounds
+differently) and do not depend on the other members, their order, the lanes or the threads:
+
+* heyoka chooses each lane's steps from that lane's Taylor coefficients alone;
+* a lane's trajectory depends on where its ``propagate_grid`` calls end (a call's last point
+  ends a step there), so each lane keeps the scalar engine's schedule of calls
+  (:class:`cayley_heyoka.engine.Propagation`). The batch call is rectangular, so a lane with
+  fewer points than the longest column gets unused points inserted between its first two (only
+  a call's last point ends a step);
+* a lane that stops (a non-finite state, its step budget spent) stops the batch call; the other
+  lanes then stand at the end of a whole step and resume from there with the rest of their
+  call — the same steps as if it had gone on;
+* a lane with no member left follows a copy of a busy lane (re-copied before every call, its
+  results unused), so that it never steps anywhere a member does not.
+
+Members with terminal events (handlers acting between steps) are not run here: each would stop
+every lane at each of its events (a Rodrigues chart re-bases every few steps). Double precision
+only (heyoka's batch integrators).
+"""
+
+from __future__ import annotations
+
+import copy
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import heyoka as hy
+import numpy as np
+
+from . import engine
+from .model import Model
+from .precision import Precision
+from .result import EventLog
+from .scene import IntegratorOptions
+
+
+@dataclass
+class LaneResult:
+    """One member's integration: what :class:`cayley_heyoka.Result` is made of.
+
+    ``states`` and ``pars`` hold one row per output time reached (the whole parameter vector
+    at each); ``status`` is 0 when every output time was reached, -1 otherwise, with
+    ``message`` saying why (``nonfinite``: the state became non-finite); ``counters["steps"]``
+    the Taylor steps taken; ``time`` the time reached.
+    """
+
+    states: np.ndarray
+    pars: np.ndarray
+    status: int
+    message: str
+    counters: dict[str, int]
+    events: dict[str, EventLog]
+    time: float
+    nonfinite: bool
+
+
+@dataclass
+class CompiledBatch:
+    """A batch integrator template for one model structure, and spares to reuse."""
+
+    integrator: Any
+    width: int
+    compile_seconds: float
+    spare: list[Any] = field(default_factory=list)
+
+    def take(self) -> Any:
+        try:
+            ta = self.spare.pop()
+        except IndexError:
+            return copy.deepcopy(self.integrator)
+        if ta.with_events:
+            for ev in ta.nt_events:
+                ev.callback.clear()
+            ta.reset_cooldowns()
+        return ta
+
+    def give(self, ta: Any) -> None:
+        if len(self.spare) < 8:
+            self.spare.append(ta)
+
+
+_CACHE: dict[str, CompiledBatch] = {}
+_DOUBLE = Precision()
+_COMPILING = threading.Lock()
+
+
+def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBatch, bool]:
+    """The batch integrator of ``model``'s structure (double precision), from the cache when
+    possible; returns it and whether it came from the cache."""
+    if options.precision.kind != "double":
+        raise ValueError("heyoka's batch integrators run in double precision only")
+    width = hy.recommended_simd_size()
+    key = f"{engine.cache_key(model, options)}/{width}"
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit, True
+    with _COMPILING:
+        hit = _CACHE.get(key)
+        if hit is not None:
+            return hit, True
+        t0 = time.perf_counter()
+        compact = engine.use_compact_mode(model, options)
+        held = model.integrator_parameters()
+        nt = [
+            hy.nt_event_batch(e.expression, _LaneRecorder(), direction=engine.event_direction(e))
+            for e in model.events
+        ]
+        extra = {} if options.tolerance is None else {"tol": _DOUBLE.number(options.tolerance)}
+        state = np.repeat(np.asarray(model.initial_state, dtype=float)[:, None], width, axis=1)
+        pars = np.asarray(model.pars.values[:held], dtype=float)
+        ta = hy.taylor_adaptive_batch(
+            model.system,
+            state,
+            pars=np.repeat(pars[:, None], width, axis=1),
+            compact_mode=compact,
+            high_accuracy=options.high_accuracy,
+            nt_events=nt,
+            **extra,
+        )
+        compiled = CompiledBatch(ta, width, time.perf_counter() - t0)
+        _CACHE[key] = compiled
+        return compiled, False
+
+
+def clear_cache() -> None:
+    """Forget the compiled batch integrators."""
+    _CACHE.clear()
+
+
+def propagate_members(
+    model: Model,
+    options: IntegratorOptions,
+    grid: np.ndarray,
+    initial: np.ndarray,
+    pars: np.ndarray,
+    threads: int = 1,
+    cancel: threading.Event | None = None,
+) -> list[LaneResult]:
+    """Integrate members of ``model``'s structure over ``grid``, lanes at a time.
+
+    Parameters
+    ----------
+    model
+        The structure (any member's model), without terminal events.
+    options
+        The members' integrator options (double precision; a ``max_step`` applies to all).
+    grid
+        The output times (doubles, strictly increasing).
+    initial
+        ``(members, len(model.system))``: each member's initial state.
+    pars
+        ``(members, len(model.pars))``: each member's whole parameter vector.
+    threads
+        Batch integrators run at once, each on its share of the members.
+    cancel
+        Once set, the lanes stop after their current call (members not finished are None).
+
+    Returns
+    -------
+    list of LaneResult
+        In the order of the members.
+    """
+    if model.terminal:
+        raise ValueError("members with terminal events run one by one (cayley_heyoka.run)")
+    compiled, _ = compile_batch(model, options)
+    members = len(initial)
+    results: list[LaneResult | None] = [None] * members
+    queue = iter(range(members))
+    lock = threading.Lock()
+
+    def next_member() -> int | None:
+        with lock:
+            return next(queue, None)
+
+    def work() -> None:
+        ta = compiled.take()
+        try:
+            lanes = _Lanes(ta, compiled.width, model, options, grid, next_member, results, cancel)
+            lanes.run(initial, pars)
+        finally:
+            compiled.give(ta)
+
+    workers = max(1, min(threads, -(-members // compiled.width)))
+    if workers == 1:
+        work()
+    else:
+        errors: list[BaseException] = []
+
+        def guarded(fn=work) -> None:
+            try:
+                fn()
+            except BaseException as exc:  # re-raised in the calling thread
+                errors.append(exc)
+
+        pool = [threading.Thread(target=guarded) for _ in range(workers)]
+        for t in pool:
+            t.start()
+        for t in pool:
+            t.join()
+        if errors:
+            raise errors[0]
+    return results  # type: ignore[return-value]
+
+
+# ---------------------------------------------------------------------- internals
+class _LaneRecorder:
+    """Non-terminal event callback of a batch integrator: each lane's occurrences."""
+
+    def __init__(self) -> None:
+        self.times: dict[int, list[float]] = {}
+        self.directions: dict[int, list[int]] = {}
+
+    def __call__(self, ta: Any, t: float, d_sgn: Any, lane: int) -> None:
+        self.times.setdefault(lane, []).append(t)
+        self.directions.setdefault(lane, []).append(int(d_sgn))
+
+    def clear(self, lane: int | None = None) -> None:
+        if lane is None:
+            self.times.clear()
+            self.directions.clear()
+        else:
+            self.times.pop(lane, None)
+            self.directions.pop(lane, None)
+
+    def take(self, lane: int) -> tuple[list[float], list[int]]:
+        return self.times.pop(lane, []), self.directions.pop(lane, [])
+
+
+@dataclass
+class _Member:
+    """A lane's member and where it stands in the engine's schedule of calls."""
+
+    index: int
+    pars: np.ndarray
+    done: int = 0
+    span: int = 0
+    since_event: int = 0
+    call_end: int | None = None
+    steps: int = 0
+    counters: dict[str, int] = field(default_factory=dict)
+    status: int = 0
+    message: str = "every output time was reached"
+    states: list[np.ndarray] = field(default_factory=list)
+    pars_rows: list[np.ndarray] = field(default_factory=list)
+    event_times: list[list[float]] = field(default_factory=list)
+    event_directions: list[list[int]] = field(default_factory=list)
+    time: float = 0.0
+    nonfinite: bool = False
+
+
+class _Lanes:
+    def __init__(self, ta, width, model, options, grid, next_member, results, cancel) -> None:
+        self.cancel = cancel
+        self.ta, self.width, self.model, self.grid = ta, width, model, grid
+        self.next_member, self.results = next_member, results
+        self.budget = options.max_steps
+        self.limit = {} if options.max_step is None else {"max_delta_t": float(options.max_step)}
+        self.held = ta.pars.shape[0]
+        self.recorders = [ev.callback for ev in ta.nt_events] if model.events else []
+        self.lanes: list[_Member | None] = [None] * width
+
+    def run(self, initial: np.ndarray, pars: np.ndarray) -> None:
+        self.initial, self.pars = initial, pars
+        for j in range(self.width):
+            self._assign(j)
+        while any(m is not None for m in self.lanes):
+            if self.cancel is not None and self.cancel.is_set():
+                return
+            self._step()
+
+    def _assign(self, j: int) -> None:
+        """Give lane ``j`` the next member, or nothing (then it follows a busy lane)."""
+        index = self.next_member()
+        if index is None:
+            self.lanes[j] = None
+            return
+        pars = np.array(self.pars[index], dtype=float)
+        member = _Member(index, pars, span=len(self.grid))
+        member.counters = {"steps": 0}
+        member.event_times = [[] for _ in self.model.events]
+        member.event_directions = [[] for _ in self.model.events]
+        self.lanes[j] = member
+        ta = self.ta
+        hi, lo = _finite_dtime(ta)
+        hi[j], lo[j] = self.grid[0], 0.0
+        ta.set_dtime(hi, lo)
+        ta.state[:, j] = self.initial[index]
+        ta.pars[:, j] = pars[: self.held]
+        for rec in self.recorders:
+            rec.clear(j)
+        if ta.with_events:
+            ta.reset_cooldowns(j)
+        self._record_trivial(j)
+
+    def _record_trivial(self, j: int) -> None:
+        """Calls of one point at the lane's current time take no step: recorded here."""
+        while (m := self.lanes[j]) is not None:
+            if m.status != 0 or m.done == len(self.grid):
+                self._finish(j)
+                continue
+            if m.call_end is None:
+                m.call_end = min(m.done + m.span, len(self.grid))
+            if m.call_end - m.done == 1 and self.ta.time[j] == self.grid[m.done]:
+                self._keep(m, self.ta.state[:, j].copy()[None, :])
+                m.call_end = None
+                m.span = min(2 * m.span, len(self.grid))
+                continue
+            return
+
+    def _column(self, j: int, m: _Member) -> tuple[np.ndarray, int]:
+        """Lane ``j``'s points for this call, and how many lead the outputs (the current
+        time, if it is not the first output)."""
+        points = self.grid[m.done : m.call_end]
+        t = self.ta.time[j]
+        if t != points[0]:
+            return np.concatenate(([t], points)), 1
+        return points, 0
+
+    def _step(self) -> None:
+        ta, width = self.ta, self.width
+        busy = [j for j in range(width) if self.lanes[j] is not None]
+        columns = {j: self._column(j, self.lanes[j]) for j in busy}
+        length = max(len(c) for c, _ in columns.values())
+        # Idle lanes follow a busy one (a copy of its time, state and parameters).
+        source = busy[0]
+        hi, lo = _finite_dtime(ta)
+        for j in range(width):
+            if self.lanes[j] is None:
+                hi[j], lo[j] = hi[source], lo[source]
+                ta.state[:, j] = ta.state[:, source]
+                ta.pars[:, j] = ta.pars[:, source]
+                if ta.with_events:
+                    ta.reset_cooldowns(j)
+                columns[j] = columns[source]
+        ta.set_dtime(hi, lo)
+        table = np.empty((length, width))
+        for j in range(width):
+            table[:, j] = _padded(columns[j][0], length)
+        left = min(self.budget - self.lanes[j].steps for j in busy)
+        out = ta.propagate_grid(table, max_steps=left, **self.limit)[-1]
+        outcomes = ta.propagate_res
+        for rec in self.recorders:
+            for j in range(width):
+                if self.lanes[j] is None:
+                    rec.clear(j)
+        for j in busy:
+            self._collect(j, columns[j], length, out[:, :, j], outcomes[j])
+
+    def _collect(self, j: int, column: tuple[np.ndarray, int], length: int, out, res) -> None:
+        """Record lane ``j``'s rows of the call and act on its outcome, as
+        :meth:`cayley_heyoka.engine.Propagation._propagate` does on a scalar integrator."""
+        ta, m = self.ta, self.lanes[j]
+        points, lead = column
+        outcome, steps = res[0], int(res[3])
+        t = ta.time[j]
+        # Rows of the table holding this lane's output times (after any inserted points).
+        extra = length - len(points)
+        rows = np.arange(lead, len(points)) + np.where(np.arange(lead, len(points)) > 0, extra, 0)
+        # heyoka writes the outputs a lane passes; a call stopped by a lane going non-finite
+        # in its first step writes none (those rows stay NaN, the lanes' times unchanged).
+        reached = int(np.count_nonzero(points[lead:] <= t))
+        finite = np.all(np.isfinite(out[rows[:reached]]), axis=1)
+        if not finite.all():
+            reached = int(np.argmin(finite))
+        m.steps += steps
+        m.counters["steps"] += steps
+        m.time = t
+        if reached:
+            self._keep(m, out[rows[:reached]].copy())
+        m.since_event += reached
+        for rec, times, directions in zip(
+            self.recorders, m.event_times, m.event_directions, strict=True
+        ):
+            got_t, got_d = rec.take(j)
+            times += got_t
+            directions += got_d
+        if t == points[-1] and m.done == m.call_end:
+            m.span = min(2 * m.span, len(self.grid))
+            m.call_end = None
+        elif m.steps >= self.budget:
+            self._out_of_steps(m, t)
+        elif outcome == hy.taylor_outcome.err_nf_state:
+            m.status, m.nonfinite = -1, True
+            when = t if np.isfinite(t) else self.grid[max(m.done - 1, 0)]
+            m.message = f"the state became non-finite after t = {when}; results kept up to there"
+        elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit):
+            pass  # another lane stopped the call, this one at the end of a whole step
+        elif outcome != hy.taylor_outcome.time_limit:
+            m.status = -1
+            m.message = f"stopped at t = {t} with outcome {outcome}"
+        self._record_trivial(j)
+
+    def _keep(self, m: _Member, rows: np.ndarray) -> None:
+        m.states.append(rows)
+        m.pars_rows.append(np.repeat(m.pars[None, :], len(rows), axis=0))
+        m.done += len(rows)
+
+    def _out_of_steps(self, m: _Member, t: float) -> None:
+        m.status = -1
+        m.message = (
+            f"the step budget integrator.max_steps = {self.budget} was spent at t = {t}; "
+            "results kept up to there (raise integrator.max_steps to go on)"
+        )
+
+    def _finish(self, j: int) -> None:
+        m = self.lanes[j]
+        dim, npar = self.ta.dim, len(m.pars)
+        states = np.concatenate(m.states) if m.states else np.empty((0, dim))
+        pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, npar))
+        recorded = list(zip(m.event_times, m.event_directions, strict=True))
+        events = engine.logs_of(self.model, recorded, _DOUBLE, None)
+        self.results[m.index] = LaneResult(
+            states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
+        )
+        self._assign(j)
+
+
+def _finite_dtime(ta: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Copies of the lanes' double-length times, a lane gone non-finite (about to be given a
+    member or a copy of a busy lane) at 0: heyoka refuses to set a non-finite time."""
+    hi, lo = (np.where(np.isfinite(a), a, 0.0) for a in ta.dtime)
+    return hi, lo
+
+
+def _padded(points: np.ndarray, length: int) -> np.ndarray:
+    """``points`` with ``length - len(points)`` unused times inserted between the first two
+    (strictly increasing, so heyoka accepts the grid; only the last point ends a step)."""
+    extra = length - len(points)
+    if extra == 0:
+        return points
+    a, b = points[0], points[1]
+    fill = a + (b - a) * (np.arange(1, extra + 1) / (extra + 1))
+    fill = fill[(fill > a) & (fill < b)]
+    if len(fill) < extra:  # a and b too close in double to hold them all
+        raise _Crowded
+    return np.concatenate(([a], fill, points[1:]))
+
+
+class _Crowded(Exception):
+    pass

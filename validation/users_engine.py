@@ -1,0 +1,160 @@
+"""What users run through the engine, against raw heyoka: a short run() and a sweep.
+
+Rows (issue 16's table, each ours ÷ its floor, timed interleaved in one process):
+
+* ``run()`` of a short span (about 10 steps) of a bundled scene without events, its integrator
+  already compiled — against heyoka alone doing the same work: a copy of the compiled
+  integrator and ``propagate_until`` (the bundled free body in Rodrigues parameters, and in a
+  quaternion);
+* ``run_sweep`` of a conservation study of free bodies (the bundled random study, its member
+  count raised) — against a hand-written heyoka batch integrator of the same equations looping
+  over the members on one thread, recording the same output times.
+
+    python validation/users_engine.py [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import sys
+from pathlib import Path
+
+import heyoka as hy
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from users_common import Row, interleaved, table  # noqa: E402
+
+import cayley_heyoka as ch  # noqa: E402
+from cayley_heyoka import engine  # noqa: E402
+from cayley_heyoka.study import Study, load_study  # noqa: E402
+from cayley_heyoka.sweep import run_sweep  # noqa: E402
+
+EXAMPLES = HERE.parent / "examples"
+
+
+def _short_scene(formulation: str) -> ch.Scene:
+    data = ch.load_scene(EXAMPLES / "free_body.toml").to_dict()
+    data["output"] = {"times": {"start": "0", "stop": "3", "count": 2}}
+    data["attitude"] = {"formulation": formulation}
+    if formulation == "quaternion":
+        data["initial"] = {"rates": data["initial"]["rates"], "quaternion": ["1", "0", "0", "0"]}
+    return ch.Scene.from_dict(data)
+
+
+def short_runs(quick: bool) -> list[Row]:
+    rows = []
+    for formulation in ("rodrigues", "quaternion"):
+        scene = _short_scene(formulation)
+        result = ch.run(scene)
+        prop = engine.Propagation(scene)
+        template = prop.compiled.integrator
+        prop.release()
+        x0 = np.array(prop.model.initial_state, dtype=float)
+        end = float(scene.output.time_grid(scene.integrator.precision)[-1])
+
+        def floor(template=template, x0=x0, end=end) -> None:
+            ta = copy.deepcopy(template)
+            ta.time = 0.0
+            ta.state[:] = x0
+            ta.propagate_until(end)
+
+        ratios, ours, raw = interleaved(
+            lambda scene=scene: ch.run(scene), floor, repeats=5 if quick else 15, inner=50
+        )
+        rows.append(
+            Row(
+                f"`run()` of a short span, bundled free body ({formulation}), compiled",
+                ratios,
+                1.5,
+                "copy of the compiled integrator + `propagate_until`",
+                f"{result.counters['steps']} steps; ours {ours * 1e6:.0f} µs, "
+                f"floor {raw * 1e6:.0f} µs",
+            )
+        )
+    return rows
+
+
+def _hand_written_batch(width: int) -> hy.taylor_adaptive_batch:
+    """Euler's equations and the quaternion kinematics, written directly in heyoka."""
+    p, q, r, qw, qx, qy, qz = hy.make_vars("p", "q", "r", "qw", "qx", "qy", "qz")
+    a, b, c = hy.par[0], hy.par[1], hy.par[2]
+    half = hy.expression(0.5)
+    system = [
+        (p, (b - c) / a * q * r),
+        (q, (c - a) / b * r * p),
+        (r, (a - b) / c * p * q),
+        (qw, half * (-qx * p - qy * q - qz * r)),
+        (qx, half * (qw * p + qy * r - qz * q)),
+        (qy, half * (qw * q + qz * p - qx * r)),
+        (qz, half * (qw * r + qx * q - qy * p)),
+    ]
+    state = np.zeros((7, width))
+    state[3] = 1.0
+    return hy.taylor_adaptive_batch(system, state, pars=np.ones((3, width)))
+
+
+def sweep(quick: bool) -> list[Row]:
+    base = load_study(EXAMPLES / "studies" / "free_body_random.toml").to_dict()
+    base.pop("scene_file", None)
+    members = 200 if quick else 2000
+    data = {**base, "sweep": {**base["sweep"], "count": members}}
+    study = Study.from_dict(data)
+    scene0 = study.member_scene(0, study.members()[0])
+    grid = scene0.output.time_grid(scene0.integrator.precision)
+    values = study.members()
+    inertia = np.array([float(x) for x in scene0.source["body"]["inertia"]])
+    rates = np.array([[float(x) for x in v] for v in values])
+    width = hy.recommended_simd_size()
+    template = _hand_written_batch(width)
+    run_sweep(Study.from_dict({**data, "sweep": {**data["sweep"], "count": 16}}))  # compile
+
+    def floor() -> int:
+        ta = copy.deepcopy(template)
+        ta.pars[:] = inertia[:, None]
+        steps = 0
+        table = np.repeat(grid[:, None], width, axis=1)
+        for lo in range(0, members, width):
+            block = rates[lo : lo + width]
+            block = np.vstack([block, np.repeat(block[-1:], width - len(block), axis=0)])
+            ta.set_time(0.0)
+            ta.state[:3] = block.T
+            ta.state[3] = 1.0
+            ta.state[4:] = 0.0
+            ta.propagate_grid(table)
+            steps += sum(res[3] for res in ta.propagate_res[: min(width, members - lo)])
+        return steps
+
+    result = run_sweep(study)
+    ratios, ours, raw = interleaved(
+        lambda: run_sweep(study), floor, repeats=3 if quick else 5, inner=1
+    )
+    steps = int(result.steps.sum())
+    return [
+        Row(
+            f"`run_sweep`: {members} free bodies (quaternion, t = 0…1000, 101 outputs), every core",
+            ratios,
+            2.0,
+            f"hand-written `taylor_adaptive_batch` loop (width {width}), one thread",
+            f"{steps / members:.0f} steps a member; ours {steps / ours / 1e6:.2f} M "
+            f"body-steps/s, floor {floor() / raw / 1e6:.2f} M; paths "
+            f"{result.metadata['paths']}",
+        )
+    ]
+
+
+def rows(quick: bool) -> list[Row]:
+    return short_runs(quick) + sweep(quick)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args()
+    print(table(rows(args.quick)))
+
+
+if __name__ == "__main__":
+    main()
