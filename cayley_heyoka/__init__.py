@@ -11,7 +11,6 @@ Quick use::
 from __future__ import annotations
 
 from importlib import import_module
-from importlib import metadata as _metadata
 from typing import TYPE_CHECKING, Any
 
 # Public names are imported on first use (PEP 562): the pytest plugin, loaded in every test
@@ -47,6 +46,11 @@ if TYPE_CHECKING:
 
 
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        # Looked up when asked for: importing importlib.metadata costs ~15 ms, a tenth of the
+        # command line's start (validation/users_cli.py).
+        globals()[name] = value = _version()
+        return value
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -56,13 +60,16 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), *_EXPORTS])
+    return sorted({*globals(), *_EXPORTS, "__version__"})
 
 
-try:
-    __version__ = _metadata.version("cayley_heyoka")
-except _metadata.PackageNotFoundError:  # pragma: no cover - source tree without install
-    __version__ = "0.0.0+unknown"
+def _version() -> str:
+    from importlib import metadata
+
+    try:
+        return metadata.version("cayley_heyoka")
+    except metadata.PackageNotFoundError:  # pragma: no cover - source tree without install
+        return "0.0.0+unknown"
 
 
 def load_result(path: str) -> Result:

@@ -11,9 +11,7 @@ when a plot is drawn, so importing this module and ``cayley-heyoka --help`` stay
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 import textwrap
 import warnings
 from collections.abc import Mapping
@@ -584,43 +582,6 @@ def _read_sweep(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], str]:
     if not complete:
         raise PlotError("a sweep file needs a dataset t and a non-empty group drift")
     return t, series, study.get("title") or f"sweep {path.name}"
-
-
-def add_command(subparsers: Any) -> None:
-    """Add ``plot FILE --kind KIND [--out F.png]`` to the ``cayley-heyoka`` command."""
-    parser = subparsers.add_parser(
-        "plot",
-        help="draw a result or sweep file as a PNG",
-        description="Draw a result or sweep file: drift against time (log-log), the polhode, "
-        "the orbit, or the invariable-plane crossings.",
-    )
-    parser.add_argument("file", type=Path, help="result or sweep HDF5 file")
-    parser.add_argument("--kind", required=True, choices=KINDS, help="what to draw")
-    parser.add_argument(
-        "--out", type=Path, help="figure file to write (default: FILE's stem + _KIND.png)"
-    )
-    parser.add_argument(
-        "--overwrite", action="store_true", help="replace --out even if it is not a plot of ours"
-    )
-    parser.set_defaults(handler=_command)
-
-
-def _command(args: argparse.Namespace) -> int:
-    from .files import OutputError, ResultFileError, check_destination
-
-    path = Path(args.file)
-    try:
-        out = args.out or path.with_name(f"{path.stem}_{args.kind}.png")
-        check_destination(out, "plot", overwrite=args.overwrite)
-        out = plot_file(args.file, args.kind, out)
-    except PlotError as exc:
-        print(f"error: {args.file}: {exc}", file=sys.stderr)
-        return 2
-    except (ImportError, OSError, OutputError, ResultFileError) as exc:  # says which file
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    print(f"plot written to {out}")
-    return 0
 
 
 # ------------------------------------------------------------------ helpers

@@ -16,10 +16,24 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-import heyoka as hy
 import numpy as np
 
 from .errors import SceneError
+
+
+class _Heyoka:
+    """heyoka, imported when a quad or MPFR number is first built: a double result file is
+    read through this module (``cayley-heyoka info``) without it, and it costs ~0.4 s. The
+    first use puts the module itself in ``hy``, so later uses cost nothing extra."""
+
+    def __getattr__(self, name: str) -> Any:
+        import heyoka
+
+        globals()["hy"] = heyoka
+        return getattr(heyoka, name)
+
+
+hy: Any = _Heyoka()
 
 Number = float | int | str
 """A scene number: a Python float/int, or decimal text kept exact until the target type is known."""

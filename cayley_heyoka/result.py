@@ -13,7 +13,6 @@ from __future__ import annotations
 import functools
 import json
 from dataclasses import dataclass, field
-from importlib import metadata as _metadata
 from pathlib import Path
 from typing import Any
 
@@ -223,11 +222,13 @@ class Result:
 
 @functools.cache
 def _versions() -> tuple[tuple[str, str], ...]:
+    from importlib import metadata  # here, not above: ~15 ms that `info` does not need
+
     import heyoka
 
     try:
-        ours = _metadata.version("cayley_heyoka")
-    except _metadata.PackageNotFoundError:  # running from a source tree
+        ours = metadata.version("cayley_heyoka")
+    except metadata.PackageNotFoundError:  # running from a source tree
         ours = "unknown"
     return (("cayley_heyoka", ours), ("heyoka", heyoka.__version__), ("numpy", np.__version__))
 

@@ -30,7 +30,6 @@ processes and gathers the chunks into the one file.
 from __future__ import annotations
 
 import os
-import sys
 import threading
 import time
 from collections import Counter
@@ -40,11 +39,10 @@ from typing import Any
 
 import numpy as np
 
-from .errors import IntegrationError, SceneError
+from .errors import IntegrationError
 from .precision import Precision
 from .scene import Scene
 from .study import (
-    BACKENDS,
     DEFAULT_CHUNK,
     Member,
     Parameter,
@@ -294,80 +292,6 @@ def integrate_members(
             path = PATH_ENSEMBLE
         part.paths[path] = part.paths.get(path, 0) + len(group)
     return part
-
-
-# ---------------------------------------------------------------------- command line
-def add_command(subparsers: Any) -> None:
-    """Add ``cayley-heyoka sweep STUDY.toml --out SWEEP.h5``."""
-    p = subparsers.add_parser(
-        "sweep",
-        help="integrate a scene over a grid or random ensemble of its numbers (conservation study)",
-    )
-    p.add_argument("study", type=Path, help="study TOML file")
-    p.add_argument("--out", type=Path, help="write the sweep to this HDF5 file")
-    p.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace --out even if it is not a sweep file of ours",
-    )
-    p.add_argument("--backend", choices=BACKENDS, help="override [run] backend")
-    p.add_argument("--scheduler", help="a Dask scheduler's address (implies --backend dask)")
-    p.add_argument("--workers", type=int, help="threads (local) or LocalCluster processes")
-    p.add_argument("--chunk", type=int, help="members per task (Dask) or per write (local)")
-    bar = p.add_mutually_exclusive_group()
-    bar.add_argument("--progress", action="store_true", default=None, help="show a progress bar")
-    bar.add_argument("--no-progress", dest="progress", action="store_false")
-    p.set_defaults(handler=_command)
-
-
-def _command(args: Any) -> int:
-    from .files import OutputError, check_destination
-
-    try:
-        if args.out:
-            check_destination(args.out, "sweep", overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    try:
-        study = load_study(args.study)
-    except (SceneError, OSError) as exc:
-        print(f"error: {args.study}: {exc}", file=sys.stderr)
-        return 2
-    show = sys.stderr.isatty() if args.progress is None else args.progress
-    bar = None
-    if show:
-        from tqdm import tqdm
-
-        bar = tqdm(total=study.size, unit="member", file=sys.stderr, dynamic_ncols=True)
-    try:
-        result = run_sweep(
-            study,
-            out=args.out,
-            backend=args.backend,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            chunk=args.chunk,
-            progress=(lambda done, total: bar.update(done - bar.n)) if bar else None,
-        )
-    except SceneError as exc:
-        print(f"error: {args.study}: {exc}", file=sys.stderr)
-        return 2
-    except OutputError as exc:  # the file could not be written: the previous one stays
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
-    except (RuntimeError, OSError) as exc:  # a backend that failed midway: the file is kept
-        print(f"error: {exc}", file=sys.stderr)
-        if args.out and args.out.exists():
-            print(f"what was computed is in {args.out}", file=sys.stderr)
-        return 1
-    finally:
-        if bar:
-            bar.close()
-    print(result.summary())
-    if args.out:
-        print(f"sweep written to {args.out}")
-    return 0 if result.completed.all() else 1
 
 
 # ---------------------------------------------------------------------- internals: running

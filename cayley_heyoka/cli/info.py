@@ -1,0 +1,46 @@
+"""``cayley-heyoka info FILE``: the summary of a result, sweep or check file.
+
+It reads HDF5 (h5py, numpy) and nothing of the engine: a double result is summarised without
+importing heyoka (a quad or multiprecision one needs heyoka's number types to be read).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add ``info`` to the ``cayley-heyoka`` command."""
+    p = subparsers.add_parser("info", help="summarise a result file")
+    p.add_argument("result", type=Path)
+    p.set_defaults(handler=command)
+
+
+def command(args: argparse.Namespace) -> int:
+    """Run the command; returns its exit code."""
+    from ..files import ResultFileError, identify
+
+    path = args.result
+    try:
+        kind = identify(path)
+        if kind == "sweep":
+            from ..sweep_result import SweepResult
+
+            text = SweepResult.load(path).summary()
+        elif kind == "check":
+            from ..checks import CheckReport
+
+            text = CheckReport.load(path).text()
+        else:  # a result, or whatever it is: the loader says what is wrong with it
+            from ..result import Result
+            from .show import summary
+
+            text = summary(Result.load(path))
+    except ResultFileError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(text)
+    return 0

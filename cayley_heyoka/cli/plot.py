@@ -1,0 +1,52 @@
+"""``cayley-heyoka plot FILE --kind KIND [--out F.png]``: a result or sweep file as a PNG
+(:mod:`cayley_heyoka.plots`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+# The kinds of plot, written here so that building the parser imports nothing of the plots;
+# tests/test_cli_imports.py holds them equal to plots.KINDS.
+KINDS: tuple[str, ...] = ("drift", "polhode", "orbit", "crossings")
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add ``plot`` to the ``cayley-heyoka`` command."""
+    parser = subparsers.add_parser(
+        "plot",
+        help="draw a result or sweep file as a PNG",
+        description="Draw a result or sweep file: drift against time (log-log), the polhode, "
+        "the orbit, or the invariable-plane crossings.",
+    )
+    parser.add_argument("file", type=Path, help="result or sweep HDF5 file")
+    parser.add_argument("--kind", required=True, choices=KINDS, help="what to draw")
+    parser.add_argument(
+        "--out", type=Path, help="figure file to write (default: FILE's stem + _KIND.png)"
+    )
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace --out even if it is not a plot of ours"
+    )
+    parser.set_defaults(handler=command)
+
+
+def command(args: argparse.Namespace) -> int:
+    """Run the command; returns its exit code."""
+    from ..files import OutputError, ResultFileError, check_destination
+    from ..plots import PlotError, plot_file
+
+    path = Path(args.file)
+    try:
+        out = args.out or path.with_name(f"{path.stem}_{args.kind}.png")
+        check_destination(out, "plot", overwrite=args.overwrite)
+        out = plot_file(args.file, args.kind, out)
+    except PlotError as exc:
+        print(f"error: {args.file}: {exc}", file=sys.stderr)
+        return 2
+    except (ImportError, OSError, OutputError, ResultFileError) as exc:  # says which file
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"plot written to {out}")
+    return 0

@@ -1,0 +1,167 @@
+"""``cayley-heyoka reference SCENE.toml --digits N --out REF.h5``: a certified reference
+solution (:mod:`cayley_heyoka.reference_run`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from . import add_progress, compiling, show_progress
+
+if TYPE_CHECKING:
+    from ..precision import Precision
+    from ..scene import Scene
+
+# The workflow's defaults and choices, written here so that building the parser imports
+# nothing of it; tests/test_cli_imports.py holds them equal to reference_run's.
+MAX_BITS = 1024
+STRETCHES = 64
+METHODS = ("auto", "closed-form", "two-precisions")
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add ``reference`` to the ``cayley-heyoka`` command."""
+    p = subparsers.add_parser(
+        "reference",
+        help="write a certified reference solution of a scene (resumable)",
+        description=(
+            "Integrate SCENE to DIGITS certified digits at its output times and write the "
+            "solution with its error certificate. Interrupted (Ctrl-C, or killed), the same "
+            "command continues from its last checkpoint and writes the same bits."
+        ),
+    )
+    p.add_argument("scene", type=Path, help="scene TOML file")
+    p.add_argument("--digits", type=int, required=True, help="decimal digits to certify")
+    p.add_argument("--out", type=Path, required=True, help="the HDF5 file to write")
+    p.add_argument(
+        "--precision", help="start from this precision: double, quad or a number of bits"
+    )
+    p.add_argument("--tolerance", help="heyoka's tolerance of the first run (default: epsilon)")
+    p.add_argument("--max-bits", type=int, default=MAX_BITS, help="stop raising precision here")
+    p.add_argument(
+        "--checkpoints", type=int, default=STRETCHES, help="checkpoints per run (default 64)"
+    )
+    p.add_argument(
+        "--certificate",
+        choices=METHODS,
+        default="auto",
+        help="closed-form (where there is one), two-precisions, or auto (the first that applies)",
+    )
+    p.add_argument("--keep-work", action="store_true", help="keep the work directory")
+    p.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace --out even if it is not a result file of ours",
+    )
+    add_progress(p)
+    p.set_defaults(handler=command)
+
+
+def command(args: argparse.Namespace) -> int:
+    """Run the command; returns its exit code."""
+    with compiling():
+        return _reference(args)
+
+
+def _reference(args: argparse.Namespace) -> int:
+    from ..errors import SceneError
+    from ..files import WriteFailed
+    from ..reference_run import generate_reference, label
+    from ..scene import load_scene
+
+    try:
+        scene = load_scene(args.scene)
+        start = _parse_precision(args.precision)
+    except SceneError as exc:
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
+    bar = _Bars(scene) if show_progress(args) else None
+    try:
+        outcome = generate_reference(
+            scene,
+            args.digits,
+            args.out,
+            precision=start,
+            tolerance=args.tolerance,
+            max_bits=args.max_bits,
+            stretches=args.checkpoints,
+            keep_work=args.keep_work,
+            overwrite=args.overwrite,
+            method=args.certificate,
+            progress=bar.update if bar else None,
+            report=print,
+            command=["cayley-heyoka", *sys.argv[1:]],
+        )
+    except KeyboardInterrupt:
+        print(
+            f"\ninterrupted: what was checkpointed is in {args.out}.work; "
+            "run the same command to continue",
+            file=sys.stderr,
+        )
+        return 130
+    except SceneError as exc:  # found when the model is built or its output times rounded
+        print(f"error: {args.scene}: {exc}", file=sys.stderr)
+        return 2
+    except WriteFailed as exc:
+        print(
+            f"error: {exc}; the checkpoints are kept in {args.out}.work: run the same command "
+            "to continue from them",
+            file=sys.stderr,
+        )
+        return 1
+    except (ValueError, RuntimeError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2 if isinstance(exc, ValueError) else 1
+    finally:
+        if bar:
+            bar.close()
+    cert = outcome.certificate
+    verdict = "certified" if outcome.certified else "NOT CERTIFIED"
+    print(
+        f"{verdict}: {cert.digits():.1f} digits of {args.digits} requested "
+        f"({label(outcome.precision)}, {cert.method}: {cert.compared_with})"
+    )
+    print(f"reference written to {outcome.path}")
+    return 0 if outcome.certified else 1
+
+
+def _parse_precision(text: str | None) -> Precision | None:
+    """``--precision`` as a :class:`~cayley_heyoka.precision.Precision`, or None."""
+    from ..errors import SceneError
+    from ..precision import Precision
+
+    if text is None:
+        return None
+    if text in ("double", "quad"):
+        return Precision(text)
+    if text.isdigit():
+        return Precision("real", int(text))
+    raise SceneError("--precision", f"must be double, quad or a number of bits, got {text!r}")
+
+
+class _Bars:
+    """One progress bar per run."""
+
+    def __init__(self, scene: Scene) -> None:
+        from ..precision import Precision
+
+        grid = scene.output.time_grid(Precision())
+        self.t0, self.t1 = float(grid[0]), float(grid[-1])
+        self.bar = None
+        self.label = None
+
+    def update(self, label: str, t: float) -> None:
+        from .show import time_bar
+
+        if label != self.label:
+            self.close()
+            self.label = label
+            self.bar = time_bar(self.t0, self.t1, desc=label)
+        self.bar.update_to(t)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
