@@ -289,6 +289,8 @@ class Propagation:
             self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
         )
         for name, value in first.items():
+            if name in model.unbounded:
+                continue
             kind = "monitors" if name in model.monitors else "outputs"
             _require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
         self._initial = initial
@@ -719,6 +721,9 @@ def first_nonfinite(
     message of the stop there; None if every value is finite."""
     first = None
     for name, value in values.items():
+        if name in model.unbounded:
+            # Infinite (or 0/0) at a half-turn, rightly; a state gone NaN shows in the others.
+            continue
         rows = np.asarray(value).reshape(len(value), -1)
         bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
         if len(bad) and (first is None or bad[0] < first[0]):

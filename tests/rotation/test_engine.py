@@ -103,6 +103,25 @@ def test_invariable_plane_crossings_are_the_zeros_of_the_rates(formulation):
     assert len(result.events["r_zero"]) == 0
 
 
+@pytest.mark.parametrize("formulation", ["quaternion", "rodrigues"])
+def test_a_half_turn_is_an_attitude_like_any_other(formulation):
+    """λ, μ, ν = tan(θ/2) n are infinite (0/0 across the axis) at a half-turn: a start there
+    is run, not refused as a non-finite output, in either formulation, and they are finite
+    again once the body has turned on."""
+    data = free_body(
+        initial={"rates": ["0.125", "0.25", "1"], "quaternion": ["0", "1", "0", "0"]},
+        attitude={"formulation": formulation},
+    )
+    del data["initial"]["rodrigues"]
+    result = run(Scene.from_dict(data))
+    assert result.success and len(result.t) == 11
+    assert np.isinf(result["lambda"][0]) and np.isnan(result["mu"][0])
+    for name in ("lambda", "mu", "nu"):
+        assert np.all(np.isfinite(result[name][1:])), name
+    # The same attitude as the quaternion's, through the λ, μ, ν that stay finite.
+    assert np.allclose(result["lambda"][1:] * result["qw"][1:], result["qx"][1:], atol=1e-12)
+
+
 def test_only_the_needed_terms_are_compiled():
     build = FAMILIES["rotation"].build
     data = free_body()
