@@ -58,6 +58,7 @@ def test_rodrigues_atlas_matches_quaternions_through_many_half_turns():
         initial={"rates": ["0.4", "3", "0.6"], "rodrigues": ["0.1", "0.2", "-0.3"]},
         output={"times": {"start": "0", "stop": "250", "count": 51}, "events": ["half_turn"]},
         events={"half_turn": {"expression": "qw"}},
+        attitude={"formulation": "rodrigues"},
     )
     atlas = run(Scene.from_dict(data))
     data["attitude"] = {"formulation": "quaternion"}
@@ -128,11 +129,17 @@ def test_only_the_needed_terms_are_compiled():
     del data["initial"]["rodrigues"]
     rates_only = build(Scene.from_dict(data))
     assert rates_only.state_names == ["p", "q", "r"]
+    # An attitude is integrated as a quaternion unless the scene names the chart.
     free = build(Scene.from_dict(free_body()))
-    assert free.state_names == ["p", "q", "r", "lambda", "mu", "nu"]
-    assert "lambda" not in str(free.system[0][1])
-    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP)))
+    assert free.state_names == ["p", "q", "r", "qw", "qx", "qy", "qz"]
+    assert not free.terminal
+    chart = build(Scene.from_dict(free_body(attitude={"formulation": "rodrigues"})))
+    assert chart.state_names == ["p", "q", "r", "lambda", "mu", "nu"]
+    assert "lambda" not in str(chart.system[0][1])
+    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP, attitude={"formulation": "rodrigues"})))
     assert "lambda" in str(top.system[0][1])
+    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP)))
+    assert "qw" in str(top.system[0][1]) and "lambda" not in str(top.system[0][1])
 
 
 def test_compiled_integrators_are_reused():
@@ -172,6 +179,7 @@ def test_output_times_do_not_perturb_a_run_with_terminal_events(prec_name):
             free_body(
                 integrator={"precision": prec.to_spec()},
                 output={"times": {"start": "0", "stop": stop, "count": count}},
+                attitude={"formulation": "rodrigues"},
             )
         )
 
