@@ -1,6 +1,7 @@
 """Figures of the engine: drift per precision, throughput, compile cost, step cost.
 
 Run:  python validation/engine_figures.py            (writes validation/ENGINE.md)
+      python validation/engine_figures.py --only formulations steps   (those sections only)
 
 Every figure quoted in README.md and docs/ about the engine comes from this script.
 
@@ -17,6 +18,7 @@ Every figure quoted in README.md and docs/ about the engine comes from this scri
 
 from __future__ import annotations
 
+import argparse
 import copy
 import json
 import os
@@ -387,7 +389,68 @@ def formulation_steps_table() -> list[str]:
     return rows
 
 
+ORBIT_NOTE = (
+    "Ω is written in Cartesian coordinates and differentiated by heyoka, then composed with "
+    "the frame tables (docs/orbits.md); the hand-written systems use the closed-form ∇Ω of "
+    "J2 instead, with literal constants that heyoka folds unless said otherwise: our "
+    "constants are runtime parameters, so that scenes differing only in numbers share "
+    "compiled code. The recipe is the same equations written by hand; the last row "
+    "is the price of generality against algebra specialised to J2 alone."
+)
+
+#: name -> (heading, what precedes the table, the table's function), in the file's order.
+SECTIONS = {
+    "drift": ("Conservation and throughput of the bundled rigid-body scenes", "", drift_table),
+    "compile": ("Compile cost", "", compile_table),
+    "formulations": (
+        "Attitude formulations over t = 500 (double, tolerance ε)",
+        "",
+        formulation_steps_table,
+    ),
+    "steps": (
+        "Step cost against a hand-written heyoka system (double, tolerance ε)",
+        "",
+        step_cost_table,
+    ),
+    "orbit": (
+        "Orbit step cost against hand-written heyoka systems (double, tolerance ε)",
+        ORBIT_NOTE,
+        orbit_step_cost_table,
+    ),
+}
+
+
+def _section(name: str) -> list[str]:
+    heading, note, fn = SECTIONS[name]
+    return [f"## {heading}", "", *([note, ""] if note else []), *fn(), ""]
+
+
+def _splice(text: str, name: str, lines: list[str]) -> str:
+    """``text`` (ENGINE.md) with section ``name`` replaced by ``lines``."""
+    heading = f"## {SECTIONS[name][0]}\n"
+    start = text.index(heading)
+    end = text.find("\n## ", start + len(heading))
+    end = len(text) if end < 0 else end + 1
+    return text[:start] + "\n".join(lines) + ("\n" if end < len(text) else "") + text[end:]
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        choices=list(SECTIONS),
+        help="regenerate these sections of the existing ENGINE.md, the others kept",
+    )
+    args = parser.parse_args()
+    path = ROOT / "validation" / "ENGINE.md"
+    if args.only:
+        text = path.read_text()
+        for name in args.only:
+            text = _splice(text, name, _section(name))
+        path.write_text(text)
+        print(f"wrote the sections {args.only} of validation/ENGINE.md")
+        return
     sections = [
         "# Engine figures",
         "",
@@ -397,35 +460,10 @@ def main() -> None:
         "`run()` (model build, re-basings, recording of every output), so short runs show the "
         "fixed cost; the pure step cost is in the last table.",
         "",
-        "## Conservation and throughput of the bundled rigid-body scenes",
-        "",
-        *drift_table(),
-        "",
-        "## Compile cost",
-        "",
-        *compile_table(),
-        "",
-        "## Attitude formulations over t = 500 (double, tolerance ε)",
-        "",
-        *formulation_steps_table(),
-        "",
-        "## Step cost against a hand-written heyoka system (double, tolerance ε)",
-        "",
-        *step_cost_table(),
-        "",
-        "## Orbit step cost against hand-written heyoka systems (double, tolerance ε)",
-        "",
-        "Ω is written in Cartesian coordinates and differentiated by heyoka, then composed with "
-        "the frame tables (docs/orbits.md); the hand-written systems use the closed-form ∇Ω of "
-        "J2 instead, with literal constants that heyoka folds unless said otherwise: our "
-        "constants are runtime parameters, so that scenes differing only in numbers share "
-        "compiled code. The recipe is the same equations written by hand; the last row "
-        "is the price of generality against algebra specialised to J2 alone.",
-        "",
-        *orbit_step_cost_table(),
-        "",
     ]
-    (ROOT / "validation" / "ENGINE.md").write_text("\n".join(sections))
+    for name in SECTIONS:
+        sections += _section(name)
+    path.write_text("\n".join(sections))
     print("wrote validation/ENGINE.md")
 
 
