@@ -162,7 +162,7 @@ def _in_thread(fn: Any) -> Any:
 
 
 def rebasing_rows(quick: bool) -> list[Row]:
-    stop, count, repeats = (200.0, 21, 5) if quick else (2e4, 201, 9)
+    stop, count, repeats = (200.0, 21, 5) if quick else (2e4, 201, 11)
     scene = _chart_scene(stop, count)
     floor = HandWrittenCharts(stop, count)
     result = ch.run(scene)
