@@ -348,6 +348,8 @@ class Propagation:
             self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
         )
         for name, value in first.items():
+            if name in model.unbounded:
+                continue
             kind = "monitors" if name in model.monitors else "outputs"
             _require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
         self._initial = initial
@@ -668,7 +670,10 @@ RESUME_SPAN = 8
 def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:
     """``points`` preceded by the current time ``t`` (heyoka's grids start there)."""
     if prec.kind != "real":
-        return np.concatenate((np.array([t], dtype=points.dtype), points))
+        # Not np.concatenate: at every terminal event, and this is half its cost.
+        out = np.empty(len(points) + 1, dtype=points.dtype)
+        out[0], out[1:] = t, points
+        return out
     # Through Python objects: numpy's copies of heyoka's multiprecision dtype alias limbs.
     return prec.array([t, *points])
 
@@ -791,6 +796,9 @@ def first_nonfinite(
     message of the stop there; None if every value is finite."""
     first = None
     for name, value in values.items():
+        if name in model.unbounded:
+            # Infinite (or 0/0) at a half-turn, rightly; a state gone NaN shows in the others.
+            continue
         rows = np.asarray(value).reshape(len(value), -1)
         bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
         if len(bad) and (first is None or bad[0] < first[0]):

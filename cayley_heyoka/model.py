@@ -148,6 +148,9 @@ class Model:
         Compile in compact mode unless the scene says otherwise: the family knows that this
         system's code is large for what it computes (heyoka's non-compact code grows with the
         expression's size, and its compile time faster), where :meth:`size` would not tell.
+    unbounded
+        Outputs whose infinite value is a value, not a failure (the Cayley–Rodrigues λ, μ, ν
+        at a half-turn): a run never stops for them, nor is refused when they start infinite.
     """
 
     family: str
@@ -160,6 +163,7 @@ class Model:
     events: list[EventSpec] = field(default_factory=list)
     terminal: list[TerminalSpec] = field(default_factory=list)
     compact: bool = False
+    unbounded: tuple[str, ...] = ()
 
     @property
     def state_names(self) -> list[str]:

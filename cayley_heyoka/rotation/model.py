@@ -29,6 +29,7 @@ from .forces import ForceContext, HeavyTop
 from .scene import RigidBody
 
 AXES = ("x1", "y1", "z1")
+RODRIGUES = ("lambda", "mu", "nu")
 MONITORS = ("energy", "momentum_squared", "momentum_space", "momentum_vertical", "orthogonality")
 
 
@@ -80,7 +81,10 @@ def build_model(scene: Scene) -> Model:
         conserved = tuple(k for k in conserved if k in wanted)
 
     events = _events(scene, body, inertia, rates, attitude, outputs, pars)
-    return Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
+    model = Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
+    # tan(θ/2) n is infinite at a half-turn in both formulations: the attitude is fine there.
+    model.unbounded = RODRIGUES if attitude else ()
+    return model
 
 
 class _Attitude:

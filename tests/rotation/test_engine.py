@@ -58,6 +58,7 @@ def test_rodrigues_atlas_matches_quaternions_through_many_half_turns():
         initial={"rates": ["0.4", "3", "0.6"], "rodrigues": ["0.1", "0.2", "-0.3"]},
         output={"times": {"start": "0", "stop": "250", "count": 51}, "events": ["half_turn"]},
         events={"half_turn": {"expression": "qw"}},
+        attitude={"formulation": "rodrigues"},
     )
     atlas = run(Scene.from_dict(data))
     data["attitude"] = {"formulation": "quaternion"}
@@ -103,17 +104,42 @@ def test_invariable_plane_crossings_are_the_zeros_of_the_rates(formulation):
     assert len(result.events["r_zero"]) == 0
 
 
+@pytest.mark.parametrize("formulation", ["quaternion", "rodrigues"])
+def test_a_half_turn_is_an_attitude_like_any_other(formulation):
+    """λ, μ, ν = tan(θ/2) n are infinite (0/0 across the axis) at a half-turn: a start there
+    is run, not refused as a non-finite output, in either formulation, and they are finite
+    again once the body has turned on."""
+    data = free_body(
+        initial={"rates": ["0.125", "0.25", "1"], "quaternion": ["0", "1", "0", "0"]},
+        attitude={"formulation": formulation},
+    )
+    del data["initial"]["rodrigues"]
+    result = run(Scene.from_dict(data))
+    assert result.success and len(result.t) == 11
+    assert np.isinf(result["lambda"][0]) and np.isnan(result["mu"][0])
+    for name in ("lambda", "mu", "nu"):
+        assert np.all(np.isfinite(result[name][1:])), name
+    # The same attitude as the quaternion's, through the λ, μ, ν that stay finite.
+    assert np.allclose(result["lambda"][1:] * result["qw"][1:], result["qx"][1:], atol=1e-12)
+
+
 def test_only_the_needed_terms_are_compiled():
     build = FAMILIES["rotation"].build
     data = free_body()
     del data["initial"]["rodrigues"]
     rates_only = build(Scene.from_dict(data))
     assert rates_only.state_names == ["p", "q", "r"]
+    # An attitude is integrated as a quaternion unless the scene names the chart.
     free = build(Scene.from_dict(free_body()))
-    assert free.state_names == ["p", "q", "r", "lambda", "mu", "nu"]
-    assert "lambda" not in str(free.system[0][1])
-    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP)))
+    assert free.state_names == ["p", "q", "r", "qw", "qx", "qy", "qz"]
+    assert not free.terminal
+    chart = build(Scene.from_dict(free_body(attitude={"formulation": "rodrigues"})))
+    assert chart.state_names == ["p", "q", "r", "lambda", "mu", "nu"]
+    assert "lambda" not in str(chart.system[0][1])
+    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP, attitude={"formulation": "rodrigues"})))
     assert "lambda" in str(top.system[0][1])
+    top = build(Scene.from_dict(free_body(forces=HEAVY_TOP)))
+    assert "qw" in str(top.system[0][1]) and "lambda" not in str(top.system[0][1])
 
 
 def test_compiled_integrators_are_reused():
@@ -153,6 +179,7 @@ def test_output_times_do_not_perturb_a_run_with_terminal_events(prec_name):
             free_body(
                 integrator={"precision": prec.to_spec()},
                 output={"times": {"start": "0", "stop": stop, "count": count}},
+                attitude={"formulation": "rodrigues"},
             )
         )
 

@@ -111,13 +111,15 @@ def test_multiprecision_against_closed_form():
         assert rel_err(result[var][-1], case[key]) < REF_DIGITS
 
 
+@pytest.mark.parametrize("formulation", ["quaternion", "rodrigues"])
 @pytest.mark.parametrize("prec_name", ["double", "quad", "real256"])
-def test_conservation_at_each_precision(prec_name):
+def test_conservation_at_each_precision(prec_name, formulation):
     prec = PRECISIONS[prec_name]
     stop = "200" if prec_name == "double" else "20"
     data = {
         "body": {"inertia": ["1", "1.6", "2.3"]},
         "initial": {"rates": ["0.3", "1", "0.5"], "rodrigues": ["0.1", "0.2", "-0.3"]},
+        "attitude": {"formulation": formulation},
         "integrator": {"precision": prec.to_spec()},
         "output": {"times": {"start": "0", "stop": stop, "count": 201}},
     }
@@ -128,4 +130,10 @@ def test_conservation_at_each_precision(prec_name):
     for name in ("energy", "momentum_squared", "momentum_space"):
         worst = float(np.max(np.abs(result.drift(name))))
         assert worst < bound, (name, worst, bound)
-    assert float(np.max(result["orthogonality"])) < 30 * prec.epsilon
+    defect = float(np.max(result["orthogonality"]))
+    if formulation == "rodrigues":
+        # The chart's matrix is orthogonal by construction: only its evaluation rounds.
+        assert defect < 30 * prec.epsilon, defect
+    else:
+        # The quaternion's norm walks by Brouwer's law like the invariants.
+        assert defect < bound, (defect, bound)
