@@ -2,7 +2,8 @@
 
 Compiled integrators are cached in memory by the *structure* of the equations (the numbers
 live in runtime parameters), so running a scene again, or a scene differing only in its
-numbers, costs a copy of a template integrator instead of an LLVM compilation.
+numbers, costs a reset of an integrator a finished run handed back (or a copy of the template)
+instead of an LLVM compilation; the model of a scene run again is kept too.
 
 Before anything is compiled a run is refused (:class:`SceneError`) if it cannot fit or cannot
 mean anything: recorded rows beyond :data:`MAX_RECORD_BYTES`, a ``max_step`` that needs more
@@ -20,6 +21,7 @@ import contextlib
 import copy
 import hashlib
 import math
+import queue
 import re
 import signal
 import threading
@@ -76,6 +78,8 @@ class Compiled:
     evaluator: Any
     compile_seconds: float
     spare: list[Any] = field(default_factory=list)
+    #: Indices of the parameters the right-hand sides use (see :class:`_Watch`).
+    rhs_pars: list[int] = field(default_factory=list)
 
     def take(self) -> Any:
         """An integrator of this structure that no one else is using, its event records
@@ -226,7 +230,8 @@ def _compile(model: Model, options: IntegratorOptions) -> Compiled:
     evaluator = hy.cfunc(
         [e for _, e in outputs], [v for v, _ in model.system], compact_mode=compact, **kw
     )
-    return Compiled(ta, evaluator, time.perf_counter() - t0)
+    rhs_pars = sorted(int(str(p)[1:]) for p in hy.get_params([rhs for _, rhs in model.system]))
+    return Compiled(ta, evaluator, time.perf_counter() - t0, rhs_pars=rhs_pars)
 
 
 def run(scene: Scene, progress: Progress | None = None) -> Result:
@@ -356,8 +361,11 @@ class Propagation:
         self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)
         ta.pars[:] = self._pars[: self._held]
-        self._signals = _DeferredSignals()
+        self._signals = _DeferredSignals(self._stop_stepping)
         self._callback = _ProgressCallback(progress, self._signals) if progress else None
+        # Whether a signal stops heyoka by poisoning the parameters (see _Watch), set per call
+        # of advance().
+        self._poisoning = False
         # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
         self._limit = {}
         if scene.integrator.max_step is not None:
@@ -408,8 +416,22 @@ class Propagation:
         budget = self.scene.integrator.max_steps
         try:
             with self._signals, quiet_heyoka():
-                self._propagate(until, end, budget, states, pars_rows)
+                self._poisoning = self._signals.active and self._can_poison()
+                if not self._poisoning:
+                    self._propagate(until, end, budget, states, pars_rows)
+                else:
+                    if self._first_call:
+                        # The first call takes at most _PROBE_STEPS steps (~ms in double):
+                        # here, without a thread; a run that needs no more ends with it.
+                        self._propagate(until, end, budget, states, pars_rows, calls=1)
+                    if self.status == 0 and (self.done < end or self._ta.time < until):
+                        _WORKER.run(
+                            lambda: self._propagate(until, end, budget, states, pars_rows),
+                            self._stop_stepping,
+                        )
         finally:
+            if self._poisoning and self._ta is not None:
+                self._ta.pars[:] = self._pars[: self._held]  # a signal may have poisoned them
             width = (len(model.system), len(model.pars))
             state = np.concatenate(states) if states else np.empty((0, width[0]))
             pars = np.array(pars_rows) if pars_rows else np.empty((0, width[1]))
@@ -418,7 +440,30 @@ class Propagation:
                 self._pars_rows.append(pars)
         return state, pars
 
-    def _propagate(self, until: Any, end: int, budget: int, states: list, pars_rows: list) -> None:
+    def _can_poison(self) -> bool:
+        """Whether a signal can stop heyoka without a per-step callback (:class:`_Watch`)."""
+        return (
+            self._callback is None
+            and self.precision.kind == "double"
+            and bool(self.compiled.rhs_pars)
+        )
+
+    def _stop_stepping(self) -> None:
+        """Called in the main thread when a signal is noted: with :class:`_Watch`, make the
+        next step non-finite, so that heyoka returns after the last whole step."""
+        ta = self._ta
+        if self._poisoning and ta is not None:
+            ta.pars[self.compiled.rhs_pars] = np.nan
+
+    def _propagate(
+        self,
+        until: Any,
+        end: int,
+        budget: int,
+        states: list,
+        pars_rows: list,
+        calls: int | None = None,
+    ) -> None:
         ta, prec, grid = self._ta, self.precision, self.grid
         # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
         # ends a step there. So after a terminal event the grid is resumed from the current
@@ -430,11 +475,17 @@ class Propagation:
         while self.status == 0 and (self.done < end or ta.time < until):
             if self._signals.received:
                 self.status = INTERRUPTED
+                # A poisoned step leaves heyoka's time NaN: name the last output time kept.
+                when = ta.time if math.isfinite(float(ta.time)) else grid[max(self.done - 1, 0)]
                 self.message = (
-                    f"interrupted ({self._signals.received}) at t = {ta.time}; results kept "
+                    f"interrupted ({self._signals.received}) at t = {when}; results kept "
                     "up to there"
                 )
                 raise KeyboardInterrupt
+            if calls is not None:
+                if calls == 0:
+                    return
+                calls -= 1
             left = budget - self.counters["steps"]
             if left <= 0:
                 self._out_of_steps(budget)
@@ -449,8 +500,11 @@ class Propagation:
                 points = _starting_at(prec, ta.time, points)
             # A call that returned mid-stretch could not be resumed without changing bits
             # (heyoka starts each call with a step to its first point, and the double-length
-            # time is not a grid point), so signals are seen by a callback after each step.
-            callback = self._callback or (self._signals.callback if self._signals.active else None)
+            # time is not a grid point), so a signal ends the call after a whole step: by
+            # poisoning the parameters (_Watch), or else by a callback after each step.
+            callback = self._callback
+            if callback is None and self._signals.active and not self._poisoning:
+                callback = self._signals.callback
             first, self._first_call = self._first_call, False
             limit = min(left, _PROBE_STEPS) if first else left
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
@@ -478,7 +532,10 @@ class Propagation:
             if outcome == hy.taylor_outcome.step_limit:
                 self._out_of_steps(budget)
                 break
-            if outcome == hy.taylor_outcome.cb_stop and self._signals.received:
+            if self._signals.received and (
+                outcome == hy.taylor_outcome.cb_stop
+                or (self._poisoning and outcome == hy.taylor_outcome.err_nf_state)
+            ):
                 continue  # reported at the top of the loop
             self._span, self._since_event = 2 * self._since_event + RESUME_SPAN, 0
             if -len(self.terminal) <= code <= -1:
@@ -713,18 +770,19 @@ class _ProgressCallback:
 
 class _DeferredSignals:
     """Within the context (in the main thread), SIGINT and SIGTERM handled by Python are only
-    noted; :meth:`callback`, called by heyoka after each step, then stops the propagation.
+    noted (and ``on_signal`` called); the propagation then ends after the current step.
 
-    The callback must be a Python function: Python runs a signal's handler only between
-    bytecodes of the main thread, so a C-level callable (a set's ``__contains__``, tried)
-    would never let the handler note anything while heyoka propagates. Measured side by side
-    on the bundled scenes in double it costs 6–18 % of the wall time, most where a step is
-    cheapest (the free body, ~1 µs a step), nothing measurable in quad
-    (``python validation/interrupt_cost.py --stop 40000``).
+    Python runs a signal's handler only between bytecodes of the main thread, so while heyoka
+    steps there nothing would note it. Two ways out: a Python callback after each step
+    (:meth:`callback`: it cost 6–18 % of the wall time of cheap double steps, the free body's
+    ~1 µs, nothing measurable in quad), or heyoka stepping in another thread while the main
+    thread waits in Python (:class:`_Watch`, double precision: no cost measurable,
+    ``python validation/interrupt_cost.py``).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, on_signal: Callable[[], None] | None = None) -> None:
         self.received = ""
+        self.on_signal = on_signal
         self._old: dict[int, Any] = {}
 
     @property
@@ -737,6 +795,8 @@ class _DeferredSignals:
 
     def _note(self, signum: int, frame: Any) -> None:
         self.received = signal.Signals(signum).name
+        if self.on_signal is not None:
+            self.on_signal()
 
     def __enter__(self) -> _DeferredSignals:
         if threading.current_thread() is threading.main_thread():
@@ -750,6 +810,63 @@ class _DeferredSignals:
         for sig, handler in self._old.items():
             signal.signal(sig, handler)
         self._old.clear()
+
+
+class _Watch:
+    """Propagations of the main thread run here, in one long-lived thread, while the main
+    thread waits in Python, where its signal handlers run at once.
+
+    A noted signal then sets the parameters that the right-hand sides use to NaN: the step
+    under way becomes non-finite, and heyoka returns the outputs of the whole steps before it
+    (``err_nf_state``; the rows it returns are the uninterrupted run's). The engine restores
+    the parameters and reports the interruption. No callback runs after each step, so an
+    uninterrupted run costs what a run in any other thread does (measured:
+    ``python validation/interrupt_cost.py``). Double precision with runtime parameters only;
+    other runs keep the per-step callback.
+    """
+
+    def __init__(self) -> None:
+        self._jobs: queue.SimpleQueue = queue.SimpleQueue()
+        self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+
+    def run(self, job: Callable[[], None], stop: Callable[[], None]) -> None:
+        """Run ``job`` in the watch's thread and wait for it; re-raise what it raised.
+
+        ``stop`` is called if the wait itself is interrupted (an exception raised by another
+        signal handler): the job is stopped and waited for before the exception goes on, so
+        that nothing steps the integrator behind the caller's back.
+        """
+        with self._lock:
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(
+                    target=self._serve, name="cayley_heyoka-propagation", daemon=True
+                )
+                self._thread.start()
+        done, box = threading.Event(), {}
+        self._jobs.put((job, done, box))
+        try:
+            while not done.wait(0.25):
+                pass
+        except BaseException:
+            stop()
+            done.wait()
+            raise
+        if "error" in box:
+            raise box["error"]
+
+    def _serve(self) -> None:
+        while True:
+            job, done, box = self._jobs.get()
+            try:
+                job()
+            except BaseException as exc:  # handed to the waiting caller
+                box["error"] = exc
+            finally:
+                done.set()
+
+
+_WORKER = _Watch()
 
 
 def check_fits(scene: Scene, model: Model) -> None:

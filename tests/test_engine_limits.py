@@ -118,6 +118,29 @@ def test_interrupt_keeps_what_was_computed():
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+def test_an_interrupt_without_callback_keeps_the_uninterrupted_bits():
+    """In the main thread, without a progress callback, heyoka steps in the engine's watch
+    thread and a signal poisons the parameters: the rows kept are the uninterrupted run's,
+    the parameters are restored, and the next run of the scene is whole."""
+    scene = _scene(output={"times": {"start": "0", "stop": "20000", "count": 801}})
+    whole = _in_a_thread(scene)  # no signal can reach it
+    halfway = whole.metadata["wall_seconds"] / 2
+    timer = threading.Timer(halfway, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(Interrupted) as info:
+            ch.run(scene)
+    finally:
+        timer.cancel()
+    part = info.value.result
+    assert part.status == engine.INTERRUPTED and "interrupted (SIGINT) at t = " in part.message
+    assert "nan" not in part.message
+    assert 0 < len(part.t) < len(whole.t)
+    _same(part, whole, rows=len(part.t))
+    again = ch.run(scene)  # on the integrator handed back: parameters restored
+    _same(again, whole)
+
+
 def test_interrupt_without_progress_callback_stops_after_a_step():
     """Without a progress callback the engine's own callback sees the signal (within a step)."""
     ch.run(_scene())  # compiled and cached, so that the signal finds the propagation

@@ -1,23 +1,29 @@
 """What watching for Ctrl-C costs a run: the same scenes run watched and unwatched, side by side.
 
-In the main thread the engine gives heyoka a callback after each step, so that SIGINT or SIGTERM
-stops the run at a step's end with its results (``cayley_heyoka.engine``, "signals"); in any
-other thread it does not (no Python signal can reach it there). This script runs each bundled
-scene to a longer end time both ways, interleaved, and prints the ratio of the least disturbed
-wall times. It judges nothing: it measures.
+In the main thread the engine watches for SIGINT and SIGTERM so that a signal stops the run at
+a step's end with its results (``cayley_heyoka.engine``, "signals"): in double precision heyoka
+steps in the engine's watch thread while the main thread waits, and a signal poisons the
+parameters; otherwise a Python callback runs after each step. In any other thread nothing is
+watched. This script runs each bundled scene both ways, interleaved (validation/users_common.py),
+and prints the median ratio and its spread. It judges nothing: it measures.
 
-    python validation/interrupt_cost.py [--repeat 5] [--stop 2000]
+    python validation/interrupt_cost.py [--repeat 7] [--stop 2000]
 """
 
 from __future__ import annotations
 
 import argparse
 import copy
+import statistics
+import sys
 import threading
 import time
 from pathlib import Path
 
 import cayley_heyoka as ch
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from users_common import interleaved  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -58,21 +64,22 @@ def in_thread(scene: ch.Scene) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--stop", type=float, default=2000.0, help="end time of the double runs")
     args = parser.parse_args()
-    print("| scene | steps | unwatched (s) | watched (s) | watched ÷ unwatched |")
+    print("| scene | steps | unwatched (s) | watched (s) | watched ÷ unwatched: median (min–max) |")
     print("|---|---|---|---|---|")
     for label, (name, extra) in SCENES.items():
         stop = args.stop / 20 if "quad" in label else args.stop
         scene = scene_for(name, stop, copy.deepcopy(extra))
         steps = ch.run(scene).counters["steps"]  # compiles once; both ways share the code
-        watched, unwatched = [], []
-        for _ in range(args.repeat):
-            unwatched.append(in_thread(scene))
-            watched.append(timed(scene))
-        a, b = min(unwatched), min(watched)
-        print(f"| {label} | {steps} | {a:.3f} | {b:.3f} | {b / a:.3f} |")
+        ratios, watched, unwatched = interleaved(
+            lambda scene=scene: timed(scene), lambda scene=scene: in_thread(scene), args.repeat
+        )
+        print(
+            f"| {label} | {steps} | {unwatched:.3f} | {watched:.3f} | "
+            f"{statistics.median(ratios):.3f} ({min(ratios):.3f}–{max(ratios):.3f}) |"
+        )
 
 
 if __name__ == "__main__":
