@@ -452,7 +452,9 @@ def difference_certificate(written: Any, other: Any) -> Certificate:
     errors = {}
     with mpmath.workdps(written.precision.dps + 5):
         for name, values in written.variables.items():
-            errors[name] = _abs_difference(values, other.variables[name])
+            errors[name] = _abs_difference(
+                values, other.variables[name], written.precision, other.precision
+            )
         event_errors = {}
         for name, log in written.events.items():
             theirs = other.events.get(name)
@@ -462,20 +464,35 @@ def difference_certificate(written: Any, other: Any) -> Certificate:
                     f"{0 if theirs is None else len(theirs)} in {other.precision.name} — the "
                     "runs disagree on an event (one grazing zero?): no certificate"
                 )
-            event_errors[name] = _abs_difference(log.time, theirs.time)
+            event_errors[name] = _abs_difference(
+                log.time, theirs.time, written.precision, other.precision
+            )
     cert = Certificate("two precisions", other.precision.name, errors, event_errors)
     return _worst(cert, written.variables, np.asarray(written.t, dtype=float))
 
 
-def _abs_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """|a - b| as float64, the subtraction done in mpmath (exact for both operands' types)."""
-    import mpmath
-
-    fa, fb = np.ravel(a), np.ravel(b)
-    out = np.array(
-        [float(abs(mpmath.mpf(str(x)) - mpmath.mpf(str(y)))) for x, y in zip(fa, fb, strict=True)]
-    )
+def _abs_difference(a: np.ndarray, b: np.ndarray, pa: Precision, pb: Precision) -> np.ndarray:
+    """|a - b| as float64, the subtraction done in mpmath on the operands' exact values."""
+    fa, fb = _exact(np.ravel(a), pa), _exact(np.ravel(b), pb)
+    out = np.array([float(abs(x - y)) for x, y in zip(fa, fb, strict=True)])
     return out.reshape(np.shape(a))
+
+
+def _precision_of(result: Any) -> Precision:
+    """The precision of a result, or of a thinned view of one (which has only the arrays)."""
+    if hasattr(result, "precision"):
+        return result.precision
+    x = np.ravel(result.t)[0]
+    if isinstance(x, float | np.floating):
+        return Precision("double")
+    return Precision("real", x.prec) if hasattr(x, "prec") else Precision("quad")
+
+
+def _exact(values: Any, prec: Precision) -> list[Any]:
+    """The exact values of numbers of ``prec``, as mpmath numbers (``str`` of a double is its
+    shortest decimal, which is not its value: up to half an ulp off)."""
+    rnd = _rounding(prec)
+    return [rnd.read(x) for x in prec.to_text(np.asarray(values))]
 
 
 class _ClosedForm:
@@ -604,7 +621,7 @@ class _FreeBody(_ClosedForm):
         rnd = job.rounding
         t0 = rnd.read(job.t0)
         crossings = []
-        with mpmath.workdps(job.dps + 10):
+        with mpmath.workdps(job.dps + 30):
             span = rnd.read(prec.to_text(grid[-1:])[0]) - t0
             for axis in axes:
                 # A zero at the start time is where the run starts, not a crossing it detects.
@@ -616,7 +633,8 @@ class _FreeBody(_ClosedForm):
                 text, written = rnd.write(exact)
                 times.append(text)
                 # The crossing's error is scaled (relative above 1): made absolute here.
-                errors.append(float(abs(written - exact) + c.error * max(1, abs(c.time))))
+                bound = c.error * max(1, abs(c.time)) + 2 * mpmath.eps * abs(exact)
+                errors.append(_upper(abs(written - exact) + bound))
         log = EventLog(
             time=prec.from_text(np.array(times, dtype=object)) if times else prec.array([]),
             direction=np.array([c.direction for c in crossings], dtype=int),
@@ -643,12 +661,15 @@ class _FreeBody(_ClosedForm):
         cols: dict[str, list[float]] = {
             n: [] for n in names + (["lambda", "mu", "nu"] if has_rodrigues else [])
         }
+        prec = _precision_of(result)
+        times = _exact(t, prec)
+        columns = {n: _exact(result.variables[n], prec) for n in cols}
         with mpmath.workdps(dps + 10):
-            t0 = mpmath.mpf(str(t[0]))
+            t0 = times[0]
             for k in range(len(t)):
-                s = exact.at(mpmath.mpf(str(t[k])) - t0)
+                s = exact.at(times[k] - t0)
                 bound = max(s.errors.values())
-                got = {n: mpmath.mpf(str(result.variables[n][k])) for n in cols}
+                got = {n: columns[n][k] for n in cols}
                 exact_q = list(s.quaternion)
                 if "qw" in got:
                     # q and −q are one attitude: compare with the sign the run took.
@@ -663,24 +684,29 @@ class _FreeBody(_ClosedForm):
                         {"lambda": exact_q[1] / w, "mu": exact_q[2] / w, "nu": exact_q[3] / w}
                     )
                 for n in cols:
-                    err = abs(got[n] - want[n]) + bound * max(1, abs(want[n]))
-                    cols[n].append(float(err))
+                    if n in ("lambda", "mu", "nu"):
+                        # λ = x/w: an error b in x and w becomes b(1 + |λ|)/|w|.
+                        bound_n = bound * (1 + abs(want[n])) / abs(exact_q[0])
+                    else:
+                        bound_n = bound * max(1, abs(want[n]))
+                    # The division and the subtraction round at the working precision.
+                    rounding = 4 * mpmath.eps * (abs(want[n]) + abs(got[n]))
+                    cols[n].append(_upper(abs(got[n] - want[n]) + bound_n + rounding))
             event_errors = {}
             log = result.events.get("invariable_plane")
             if log is not None:
-                event_errors["invariable_plane"] = self._crossings(exact, log, t, t0)
+                event_errors["invariable_plane"] = self._crossings(exact, log, times[-1], t0, prec)
         errors = {n: np.array(v) for n, v in cols.items()}
         cert = Certificate("closed form", self.name, errors, event_errors)
         return _worst(cert, result.variables, np.asarray(t, dtype=float))
 
     @staticmethod
-    def _crossings(exact: Any, log: Any, t: np.ndarray, t0: Any) -> np.ndarray:
-        import mpmath
-
-        span = mpmath.mpf(str(t[-1])) - t0
-        errors = []
+    def _crossings(exact: Any, log: Any, t1: Any, t0: Any, prec: Precision) -> np.ndarray:
+        """Each recorded crossing's error, in the log's order."""
+        span = t1 - t0
+        errors = np.zeros(len(log))
         for axis in ("x1", "y1", "z1"):
-            ours = [mpmath.mpf(str(x)) - t0 for x in log.where(axis)]
+            ours = [x - t0 for x in _exact(log.where(axis), prec)]
             theirs = exact.crossing_times(axis, 0, span)
             if len(ours) != len(theirs):
                 raise RuntimeError(
@@ -688,11 +714,11 @@ class _FreeBody(_ClosedForm):
                     f"{len(theirs)} in the closed form — no certificate"
                 )
             # The crossing's error is scaled (relative above 1): made absolute here.
-            errors += [
-                float(abs(a - c.time) + c.error * max(1, abs(c.time)))
+            errors[np.flatnonzero(log.label == axis)] = [
+                _upper(abs(a - c.time) + c.error * max(1, abs(c.time)))
                 for a, c in zip(ours, theirs, strict=True)
             ]
-        return np.array(errors)
+        return errors
 
 
 class _Projectile(_ClosedForm):
@@ -734,21 +760,29 @@ class _Projectile(_ClosedForm):
         t = result.t
         names = [n for n in result.variables if n[:-1] in ("eta", "varpi") or n == "S"]
         cols: dict[str, list[float]] = {n: [] for n in names}
+        prec = _precision_of(result)
+        times = _exact(t, prec)
+        columns = {n: _exact(result.variables[n], prec) for n in names}
         with mpmath.workdps(dps + 10):
-            t0 = mpmath.mpf(str(t[0]))
             for k in range(len(t)):
-                tk = mpmath.mpf(str(t[k])) - t0
+                tk = times[k] - times[0]
                 s = projectile_solution(c["g"], c["mu"], c["nu"], h.eta, h.varpi, tk, dps=dps)
                 want = {f"eta{i + 1}": s.eta[i] for i in range(3)}
                 want.update({f"varpi{i + 1}": s.varpi[i] for i in range(3)})
                 want["S"] = s.S
                 for n in names:
-                    got = mpmath.mpf(str(result.variables[n][k]))
+                    got = columns[n][k]
                     bound = s.errors[n] * max(1, abs(want[n]))
-                    cols[n].append(float(abs(got - want[n]) + bound))
+                    cols[n].append(_upper(abs(got - want[n]) + bound))
         errors = {n: np.array(v) for n, v in cols.items()}
         cert = Certificate("closed form", self.name, errors)
         return _worst(cert, result.variables, np.asarray(t, dtype=float))
+
+
+def _upper(x: Any) -> float:
+    from .reference.evaluate import upper
+
+    return upper(x)
 
 
 def _rounding(prec: Precision) -> Any:

@@ -71,6 +71,12 @@ class Rounding:
         return text, self.read(text)
 
 
+def upper(x: mpmath.mpf) -> float:
+    """``x`` as a float rounded up, so that an error bound stays a bound."""
+    f = float(x)
+    return f if f >= x else math.nextafter(f, math.inf)
+
+
 # ---------------------------------------------------------------------- the closed forms
 @dataclass(frozen=True)
 class FreeBodyJob:
@@ -115,7 +121,7 @@ class FreeBodyJob:
         rnd = self.rounding
 
         def at(text: str) -> Row:
-            with mpmath.workdps(self.dps + 10):
+            with mpmath.workdps(self.dps + 30):
                 s = body.at(rnd.read(text) - t0)
                 bound = s.error  # the worst of the rates and quaternions, scaled
                 w, x, y, z = s.quaternion
@@ -130,9 +136,10 @@ class FreeBodyJob:
                         err = bound * (1 + abs(v)) / abs(w) if w != 0 else mpmath.inf
                     else:
                         err = bound * max(1, abs(v))
+                    err += 2 * mpmath.eps * abs(v)  # this division's rounding
                     text_v, written = rnd.write(v)
                     values[name] = text_v
-                    errors[name] = float(abs(written - v) + err) if mpmath.isfinite(v) else math.inf
+                    errors[name] = upper(abs(written - v) + err) if mpmath.isfinite(v) else math.inf
                 inertia = [mpmath.mpf(m) for m in self.inertia]
                 for name in self.monitors:
                     values[name] = self._monitor(name, s, inertia)
@@ -181,7 +188,7 @@ class ProjectileJob:
         t0 = rnd.read(self.t0)
 
         def at(text: str) -> Row:
-            with mpmath.workdps(self.dps + 10):
+            with mpmath.workdps(self.dps + 30):
                 s = projectile_solution(
                     self.g, self.mu, self.nu, self.eta, self.varpi, rnd.read(text) - t0, self.dps
                 )
@@ -192,7 +199,8 @@ class ProjectileJob:
                 for name in self.variables:
                     v = exact[name]
                     values[name], written = rnd.write(v)
-                    errors[name] = float(abs(written - v) + s.errors[name] * max(1, abs(v)))
+                    bound = s.errors[name] * max(1, abs(v)) + 2 * mpmath.eps * abs(v)
+                    errors[name] = upper(abs(written - v) + bound)
                 if "energy" in self.monitors:
                     g, mu, nu = (mpmath.mpf(c) for c in (self.g, self.mu, self.nu))
                     eta, varpi = s.eta, s.varpi
