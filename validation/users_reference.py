@@ -14,8 +14,11 @@ Rows (validation/users_common.py's ``Row``):
    integration it replaces (``--certificate integrate``), timed interleaved.
 3. (full run only) The free body over 10 periods, 100 outputs, at 30 digits: the closed form ÷
    the integration it replaces, interleaved.
+4. The reference's unit of work, ``FreeRigidBody.at`` at the 41 digits a 30-digit file needs
+   (128 bits), at times spread over 10⁴ periods: CPU seconds per call with mpmath on gmpy2 ÷
+   pure-Python mpmath (``MPMATH_NOGMPY=1``), each in its own process, alternately.
 
-``--quick`` (the smoke run): 10 periods and 100 outputs in row 1, three repeats, no row 3.
+``--quick`` (the smoke run): 10 periods and 100 outputs in row 1, two repeats, no row 3.
 """
 
 from __future__ import annotations
@@ -83,7 +86,7 @@ def timed(argv: list[str]) -> tuple[float, float, str]:
 
 
 def free_body_row(quick: bool, where: Path) -> Row:
-    periods, outputs, repeats = (10, 100, 3) if quick else (10**4, 2000, 5)
+    periods, outputs, repeats = (10, 100, 2) if quick else (10**4, 2000, 5)
     scene = free_body_scene(periods, outputs, where)
     walls, cpus, out = [], [], ""
     for _ in range(repeats):
@@ -125,6 +128,54 @@ def versus_integration(what: str, scene: Path, where: Path, repeats: int) -> Row
     )
 
 
+AT_PROBE = """
+import sys, time, mpmath
+from cayley_heyoka.reference import FreeRigidBody
+body = FreeRigidBody(("1.0", "1.5", "2.5"), ("0.125", "0.25", "1.0"),
+                     rodrigues=("0.1", "0.2", "-0.3"), dps=41)
+n = int(sys.argv[1])
+times = [body.period * 10**4 * k / n + 1 for k in range(n)]
+body.at(times[0])
+t0 = time.process_time()
+for t in times:
+    body.at(t)
+print(mpmath.libmp.BACKEND, (time.process_time() - t0) / n)
+"""
+
+
+def gmpy_row(quick: bool) -> Row:
+    """CPU time per FreeRigidBody.at with gmpy2 ÷ without, in alternating processes."""
+    calls, repeats = (10, 2) if quick else (60, 5)
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    argv = [sys.executable, "-c", AT_PROBE, str(calls)]
+    ratios, seconds = [], {"gmpy": [], "python": []}
+    for k in range(repeats):
+        pair = {}
+        for nogmpy in (False, True) if k % 2 == 0 else (True, False):
+            e = {**env, "MPMATH_NOGMPY": "1"} if nogmpy else env
+            backend, per = subprocess.run(
+                argv, env=e, capture_output=True, text=True, check=True
+            ).stdout.split()
+            pair[backend] = float(per)
+        if set(pair) != {"gmpy", "python"}:
+            raise RuntimeError(f"gmpy2 is not installed here: backends {sorted(pair)}")
+        ratios.append(pair["gmpy"] / pair["python"])
+        for name in pair:
+            seconds[name].append(pair[name])
+    gmpy, python = (statistics.median(seconds[n]) for n in ("gmpy", "python"))
+    return Row(
+        what="`FreeRigidBody.at` at 41 digits (a 30-digit reference's unit of work), on gmpy2",
+        ratios=ratios,
+        target=1.0,
+        floor="pure-Python mpmath (`MPMATH_NOGMPY=1`)",
+        note=(
+            f"CPU {gmpy * 1e3:.2f} ms against {python * 1e3:.2f} ms per call "
+            f"({python / gmpy:.2f}x); {calls} times over 10⁴ periods, {repeats} repeats"
+        ),
+        seconds={"gmpy": gmpy, "python": python},
+    )
+
+
 def rows(quick: bool) -> list[Row]:
     """The reference command's rows (see the module docstring)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -135,7 +186,7 @@ def rows(quick: bool) -> list[Row]:
                 f"`cayley-heyoka reference` of Hamilton's projectile, {DIGITS} digits",
                 EXAMPLES / "projectile.toml",
                 where,
-                3 if quick else 5,
+                2 if quick else 5,
             )
         )
         if not quick:
@@ -148,6 +199,7 @@ def rows(quick: bool) -> list[Row]:
                     5,
                 )
             )
+    out.append(gmpy_row(quick))
     return out
 
 

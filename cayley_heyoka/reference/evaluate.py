@@ -31,9 +31,11 @@ from typing import Any
 
 import mpmath
 
-#: Below this many output times the evaluation stays in the calling process (starting a
-#: worker costs ~0.3 s: its imports and the closed form's constants).
-PARALLEL_FROM = 48
+#: Below this many output times the evaluation stays in the calling process: starting a
+#: worker costs ~0.4 s of CPU (its imports and the closed form's constants at each working
+#: precision), some 40 evaluations of the free body at 30 digits, so that fewer times gain
+#: little from a second core (validation/users_reference.py, the 100-output row).
+PARALLEL_FROM = 200
 #: Chunks the times are split into, whatever the number of workers: enough to balance the
 #: load and report progress, few enough to keep the per-chunk overhead small; each finished
 #: chunk is saved when there is a work directory, so an interrupted evaluation resumes.
