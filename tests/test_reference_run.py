@@ -86,6 +86,7 @@ def test_closed_form_certificate_catches_a_loose_run_and_escalates(tmp_path):
     cert = read_certificate(tmp_path / "ref.h5")
     assert cert["method"] == "closed form" and cert["digits_certified"] >= 25
     assert len(cert["event_errors"]["invariable_plane"]) > 0
+    assert ch.load_result(out.path).metadata["reference"]["method"] == "integration"
 
 
 def test_projectile_reference_matches_the_notes_and_reproduces_from_its_metadata(tmp_path):
