@@ -89,6 +89,7 @@ def free_body_row(quick: bool, where: Path) -> Row:
     periods, outputs, repeats = (10, 100, 2) if quick else (10**4, 2000, 5)
     scene = free_body_scene(periods, outputs, where)
     walls, cpus, out = [], [], ""
+    load = os.getloadavg()[0]  # the other processes' share of the cores, for the reader
     for _ in range(repeats):
         wall, cpu, out = timed(command(scene, where / "ref.h5"))
         walls.append(wall)
@@ -104,7 +105,8 @@ def free_body_row(quick: bool, where: Path) -> Row:
         floor=f"an absolute {TARGET_SECONDS:g} s",
         note=(
             f"wall {statistics.median(walls):.1f} s ({min(walls):.1f}–{max(walls):.1f}), "
-            f"CPU {statistics.median(cpus):.1f} s on {os.cpu_count()} cores; closed form, "
+            f"CPU {statistics.median(cpus):.1f} s on {os.cpu_count()} cores (load average "
+            f"{load:.1f} before, {os.getloadavg()[0]:.1f} after); closed form, "
             f"{digits.group(1) if digits else '?'} digits certified; {repeats} repeats"
         ),
         seconds={"wall": statistics.median(walls), "cpu": statistics.median(cpus)},
