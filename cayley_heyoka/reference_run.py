@@ -1,30 +1,43 @@
 """Certified reference solutions: ``cayley-heyoka reference SCENE.toml --digits 30 --out REF.h5``.
 
 A reference solution is a scene's trajectory at its output times, written with an error
-certificate: the estimated absolute error of every variable at every time. How it is made:
+certificate: the estimated absolute error of every variable at every time. The cheapest
+certified route is taken:
 
-1. **Precision.** The smallest of double, quad (``real128``) or MPFR ``real`` whose epsilon
-   leaves :data:`GUARD_DIGITS` digits beyond the requested ones; the tolerance is that
-   precision's epsilon (heyoka's default), unless given.
-2. **Certificate.** Where the scene has a closed form — the torque-free body
-   (:class:`~cayley_heyoka.reference.FreeRigidBody`, also its invariable-plane crossings) and
-   Hamilton's projectile (:func:`~cayley_heyoka.reference.projectile_solution`) — the run is
-   compared with it, evaluated in mpmath with its own certified error. Otherwise the scene is
-   integrated again at a higher precision (its epsilon as tolerance), independent in both
-   round-off and truncation; the more precise run is written and the difference of the two is
-   its certificate (an estimate of the less precise run's error, so a conservative one of the
-   written run's).
-3. **Escalation.** If the certificate does not reach the requested digits (scaled errors:
-   absolute where |x| ≤ 1, relative above), the precisions are raised and the run repeated, up
-   to ``max_bits``; past that the file is written marked uncertified and the command exits 1.
+* **Closed form** (``method="auto"`` or ``"closed-form"``), where the scene has one — the
+  torque-free body (:class:`~cayley_heyoka.reference.FreeRigidBody`, also its invariable-plane
+  crossings) and Hamilton's projectile (:func:`~cayley_heyoka.reference.projectile_solution`):
+  the closed form itself is the reference, evaluated at each output time in mpmath with its own
+  certified error bound (two working precisions), in parallel over cores
+  (:mod:`cayley_heyoka.reference.evaluate`), and rounded once to the file's precision; the
+  certificate is that rounding, measured exactly, plus the bound. Nothing is integrated.
+* **Integration** (``method="integrate"``, or ``"auto"`` with a ``tolerance``, or
+  ``"two-precisions"``), the independent check of the integrator and the only route where
+  there is no closed form:
 
-Runs go through :class:`~cayley_heyoka.checkpoint.CheckpointedRun` in a work directory beside
-the output (``REF.h5.work``): an interrupted command, run again, continues where it stopped
-and writes the same bits as an uninterrupted one. Once the file is written, the files the runs
-wrote there are removed (and the directory, if nothing else is in it); a ``OUT.work`` that this
-command did not make (it carries the marker file :data:`WORK_MARKER`) is refused, not touched.
-The file is an ordinary result file (``cayley_heyoka.load_result``) with a ``certificate`` group
-and the metadata needed to reproduce it (``metadata["reference"]``).
+  1. *Precision.* The smallest of double, quad (``real128``) or MPFR ``real`` whose epsilon
+     leaves :data:`GUARD_DIGITS` digits beyond the requested ones; the tolerance is that
+     precision's epsilon (heyoka's default), unless given.
+  2. *Certificate.* With a closed form (``"integrate"``) the run is compared with it.
+     Otherwise the scene is integrated again at a higher precision (its epsilon as
+     tolerance), independent in both round-off and truncation; the more precise run is
+     written and the difference of the two is its certificate (an estimate of the less
+     precise run's error, so a conservative one of the written run's).
+
+Both routes escalate: if the certificate does not reach the requested digits (scaled errors:
+absolute where |x| ≤ 1, relative above), the precision is raised and the work repeated, up to
+``max_bits``; past that the file is written marked uncertified and the command exits 1.
+
+Integrations go through :class:`~cayley_heyoka.checkpoint.CheckpointedRun` in a work
+directory beside the output (``REF.h5.work``): an interrupted command, run again, continues
+where it stopped and writes the same bits as an uninterrupted one. Once the file is written,
+the files the runs wrote there are removed (and the directory, if nothing else is in it); a
+``OUT.work`` that this command did not make (it carries the marker file :data:`WORK_MARKER`)
+is refused, not touched. The closed-form route needs no work directory: it writes the file
+at the end, whole or not at all (:func:`cayley_heyoka.files.write_hdf5`). Either way the file
+is an ordinary result file (``cayley_heyoka.load_result``) with a ``certificate`` group and
+the metadata needed to reproduce it (``metadata["reference"]``, whose ``method`` is
+``"closed form"`` or ``"integration"``).
 """
 
 from __future__ import annotations
@@ -53,8 +66,11 @@ MAX_BITS = 1024
 #: Stretches between checkpoints (each ends a step; the count is part of what the file records).
 STRETCHES = 64
 _BITS_PER_DIGIT = math.log2(10)
-#: How the certificate is made.
-METHODS = ("auto", "closed-form", "two-precisions")
+#: How the reference is made: "closed-form" evaluates the closed form; "integrate" integrates
+#: and certifies against the closed form where there is one, else as "two-precisions" does;
+#: "auto" is "closed-form" where the scene has one (and no tolerance is asked for), else an
+#: integration.
+METHODS = ("auto", "closed-form", "integrate", "two-precisions")
 #: The file that marks a work directory as made by :func:`generate_reference`.
 WORK_MARKER = ".cayley_heyoka-reference-work"
 
@@ -142,8 +158,9 @@ def generate_reference(
     progress: Any = None,
     report: Any = None,
     command: list[str] | None = None,
+    workers: int | None = None,
 ) -> ReferenceOutcome:
-    """Integrate ``scene`` to ``digits`` certified digits and write the reference file.
+    """Write the reference file of ``scene``, certified to ``digits`` digits.
 
     Parameters
     ----------
@@ -154,29 +171,37 @@ def generate_reference(
     out
         The HDF5 file to write.
     precision
-        Start from this precision instead of the one chosen for ``digits``.
+        Start from this precision instead of the one chosen for ``digits`` (the closed form:
+        write in it).
     tolerance
         heyoka's tolerance for the first run (decimal text); default: its precision's epsilon.
+        Asks for an integration: with ``method="auto"`` the closed form is not taken.
     max_bits
         Give up raising the precision beyond this many bits.
     stretches
         Checkpoints per run (see :class:`~cayley_heyoka.checkpoint.CheckpointedRun`).
     workdir
-        Where runs are checkpointed; default ``OUT.work`` beside ``out``.
+        Where runs are checkpointed; default ``OUT.work`` beside ``out`` (integrations only).
     keep_work
         Keep the work directory after the file is written.
     overwrite
         Replace ``out`` even if it is not a result file of ours (see
         :func:`cayley_heyoka.files.check_destination`).
     method
-        ``"auto"`` (the closed form where there is one), ``"closed-form"`` or
+        ``"auto"`` (the closed form where there is one and no ``tolerance`` is given, else an
+        integration), ``"closed-form"`` (evaluate it), ``"integrate"`` (integrate, certified
+        by the closed form where there is one, else by a second precision) or
         ``"two-precisions"``.
     progress
-        ``progress(run_label, time)`` after each step, or None.
+        ``progress(label, time)`` after each step of a run, or each chunk of closed-form
+        evaluations; or None.
     report
         ``report(text)`` for one-line accounts of the plan and each run, or None.
     command
         The command line, for the file's metadata.
+    workers
+        Processes evaluating the closed form; default: every core. The file's values are
+        the same bits whatever the count.
 
     Returns
     -------
@@ -189,6 +214,9 @@ def generate_reference(
     OutputError
         Before anything is integrated: ``out`` may not be written, or ``workdir`` exists and
         is not a work directory of this function.
+    RuntimeError
+        The closed form could not certify its own digits at some time (next to a singular
+        configuration), or an integration stopped.
     """
     if isinstance(digits, bool) or not isinstance(digits, int) or digits < 1:
         raise ValueError(f"digits must be an integer >= 1, got {digits!r}")
@@ -204,17 +232,37 @@ def generate_reference(
     say = report or (lambda text: None)
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if workers is not None and (isinstance(workers, bool) or workers < 1):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     closed = closed_form_for(scene) if method != "two-precisions" else None
     if method == "closed-form" and closed is None:
         raise ValueError(
             "method 'closed-form': this scene has none here (a torque-free body without user "
             "events, or Hamilton's projectile in canonical form); use 'two-precisions'"
         )
+    if method == "closed-form" and tolerance is not None:
+        raise ValueError("tolerance applies to an integration; the closed form integrates nothing")
     first = precision or precision_for(digits + GUARD_DIGITS)
     if first.bits > max_bits:
         raise ValueError(f"max_bits ({max_bits}) is below the precision needed ({label(first)})")
+    evaluated = None
+    if closed is not None and (method == "closed-form" or (method == "auto" and not tolerance)):
+        evaluated = closed.job(first)
+        if evaluated is None and method == "closed-form":
+            raise ValueError(
+                "method 'closed-form': the scene asks for outputs the closed form does not "
+                "give (it gives the state, the attitude and the conserved monitors); use "
+                "'integrate'"
+            )
     check_destination(out, "result", overwrite=overwrite)
     _claim_workdir(workdir)
+    if evaluated is not None:
+        outcome = _closed_form_reference(
+            scene, closed, digits, out, first, max_bits, workers, workdir, progress, say, command
+        )
+        if not keep_work:
+            _remove_workdir(workdir)
+        return outcome
     say(
         f"plan: {digits} digits; {label(first)} first; certificate "
         + (f"from the closed form ({closed.name})" if closed else "from a second precision")
@@ -289,6 +337,7 @@ def generate_reference(
     certified = attempts[-1]["scaled_error"] <= 10.0**-digits
     metadata = {
         "command": command or [],
+        "method": "integration",
         "digits": digits,
         "certified": certified,
         "precision": written.precision.name,
@@ -306,6 +355,72 @@ def generate_reference(
     if not keep_work:
         _remove_workdir(workdir)
     return ReferenceOutcome(out, certified, cert, written.precision, attempts)
+
+
+def _closed_form_reference(
+    scene: Scene,
+    closed: _ClosedForm,
+    digits: int,
+    out: Path,
+    prec: Precision,
+    max_bits: int,
+    workers: int | None,
+    workdir: Path,
+    progress: Any,
+    say: Any,
+    command: list[str] | None,
+) -> ReferenceOutcome:
+    """The closed-form route of :func:`generate_reference`: evaluate, certify, write."""
+    from .reference.accuracy import PrecisionNotReached
+
+    say(f"plan: {digits} digits; the closed form ({closed.name}) in {label(prec)}")
+    started = time.perf_counter()
+    attempts: list[dict[str, Any]] = []
+    while True:
+        t0 = time.perf_counter()
+        try:
+            result, cert, resumed = closed.evaluate(
+                prec, workers, progress, workdir / f"closed-form-{prec.name}"
+            )
+        except PrecisionNotReached as exc:
+            raise RuntimeError(f"the closed form cannot certify its digits: {exc}") from None
+        attempts.append(
+            {
+                "precision": prec.name,
+                "compared_with": cert.compared_with,
+                "scaled_error": cert.scaled,
+                "worst": list(cert.worst),
+            }
+        )
+        note = f" (resumed after {resumed} chunks)" if resumed else ""
+        say(
+            f"closed form: {len(result.t)} times in {label(prec)}, "
+            f"{time.perf_counter() - t0:.2f} s{note}; certificate: {cert.digits():.1f} digits "
+            f"(largest scaled error {cert.scaled:.2e} in {cert.worst[0]} at "
+            f"t = {cert.worst[1]:.6g})"
+        )
+        if cert.scaled <= 10.0**-digits or next_precision(prec).bits > max_bits:
+            break
+        prec = next_precision(prec)
+        say(f"not enough: raising the precision to {label(prec)}")
+    certified = cert.scaled <= 10.0**-digits
+    metadata = {
+        "command": command or [],
+        "method": "closed form",
+        "digits": digits,
+        "certified": certified,
+        "precision": prec.name,
+        "attempts": attempts,
+        "guard_digits": GUARD_DIGITS,
+        "max_bits": max_bits,
+        "wall_seconds": time.perf_counter() - started,
+        "scene_sha256": hashlib.sha256(
+            json.dumps(scene.to_dict(), sort_keys=True).encode()
+        ).hexdigest(),
+        "environment": _environment(),
+    }
+    _write(out, result, cert, digits, certified, metadata)
+    return ReferenceOutcome(out, certified, cert, prec, attempts)
 
 
 # ---------------------------------------------------------------------- certificates
@@ -335,7 +450,9 @@ def difference_certificate(written: Any, other: Any) -> Certificate:
     errors = {}
     with mpmath.workdps(written.precision.dps + 5):
         for name, values in written.variables.items():
-            errors[name] = _abs_difference(values, other.variables[name])
+            errors[name] = _abs_difference(
+                values, other.variables[name], written.precision, other.precision
+            )
         event_errors = {}
         for name, log in written.events.items():
             theirs = other.events.get(name)
@@ -345,29 +462,109 @@ def difference_certificate(written: Any, other: Any) -> Certificate:
                     f"{0 if theirs is None else len(theirs)} in {other.precision.name} — the "
                     "runs disagree on an event (one grazing zero?): no certificate"
                 )
-            event_errors[name] = _abs_difference(log.time, theirs.time)
+            event_errors[name] = _abs_difference(
+                log.time, theirs.time, written.precision, other.precision
+            )
     cert = Certificate("two precisions", other.precision.name, errors, event_errors)
     return _worst(cert, written.variables, np.asarray(written.t, dtype=float))
 
 
-def _abs_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """|a - b| as float64, the subtraction done in mpmath (exact for both operands' types)."""
-    import mpmath
-
-    fa, fb = np.ravel(a), np.ravel(b)
-    out = np.array(
-        [float(abs(mpmath.mpf(str(x)) - mpmath.mpf(str(y)))) for x, y in zip(fa, fb, strict=True)]
-    )
+def _abs_difference(a: np.ndarray, b: np.ndarray, pa: Precision, pb: Precision) -> np.ndarray:
+    """|a - b| as float64, the subtraction done in mpmath on the operands' exact values."""
+    fa, fb = _exact(np.ravel(a), pa), _exact(np.ravel(b), pb)
+    out = np.array([float(abs(x - y)) for x, y in zip(fa, fb, strict=True)])
     return out.reshape(np.shape(a))
 
 
+def _precision_of(result: Any) -> Precision:
+    """The precision of a result, or of a thinned view of one (which has only the arrays)."""
+    if hasattr(result, "precision"):
+        return result.precision
+    x = np.ravel(result.t)[0]
+    if isinstance(x, float | np.floating):
+        return Precision("double")
+    return Precision("real", x.prec) if hasattr(x, "prec") else Precision("quad")
+
+
+def _exact(values: Any, prec: Precision) -> list[Any]:
+    """The exact values of numbers of ``prec``, as mpmath numbers (``str`` of a double is its
+    shortest decimal, which is not its value: up to half an ulp off)."""
+    rnd = _rounding(prec)
+    return [rnd.read(x) for x in prec.to_text(np.asarray(values))]
+
+
 class _ClosedForm:
-    """A closed form that a scene's run can be compared with."""
+    """A scene's closed form: evaluated as the reference, or compared with a run."""
 
     name = ""
 
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+
     def certificate(self, result: Any, digits: int) -> Certificate:
         raise NotImplementedError
+
+    def job(self, prec: Precision) -> Any:
+        """What workers evaluate to write the scene's outputs in ``prec`` (None: it cannot).
+
+        The names come from the model the integration would build, so that the file holds
+        every output variable and monitor the integrated run would write, and nothing else.
+        """
+        from .families import FAMILIES
+
+        variant = _with_precision(self.scene, prec, None)
+        model = FAMILIES[variant.family].build(variant)
+        grid = variant.output.time_grid(prec)
+        return self._job(variant, model, prec, prec.to_text(grid[:1])[0])
+
+    def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
+        raise NotImplementedError
+
+    def evaluate(
+        self, prec: Precision, workers: int | None, progress: Any, store: Path | None = None
+    ) -> tuple[Any, Certificate, int]:
+        """The scene's outputs in ``prec`` from the closed form, their certificate, and the
+        number of chunks read back from ``store`` (see :func:`.reference.evaluate.evaluate`)."""
+        from .families import FAMILIES
+        from .reference.evaluate import evaluate
+        from .result import Result, versions
+
+        wall = time.perf_counter()
+        variant = _with_precision(self.scene, prec, None)
+        model = FAMILIES[variant.family].build(variant)
+        grid = variant.output.time_grid(prec)
+        texts = list(prec.to_text(grid))
+        job = self._job(variant, model, prec, texts[0])
+        tick = None
+        if progress is not None:
+            tick = lambda done: progress("closed form", float(grid[done - 1]))  # noqa: E731
+        rows, (events, event_errors), resumed = evaluate(
+            job, texts, workers, tick, lambda: self._events(job, model, prec, grid), store
+        )
+        variables = {
+            n: prec.from_text(np.array([v[n] for v, _ in rows], dtype=object))
+            for n in job.variables
+        }
+        monitors = {
+            n: prec.from_text(np.array([v[n] for v, _ in rows], dtype=object)) for n in job.monitors
+        }
+        result = Result(
+            t=grid,
+            variables=variables,
+            monitors=monitors,
+            conserved=model.conserved,
+            events=events,
+            precision=prec,
+            message="every output time was reached (closed form)",
+            scene=variant.to_dict(),
+            metadata={**versions(), "wall_seconds": time.perf_counter() - wall},
+        )
+        errors = {n: np.array([e[n] for _, e in rows]) for n in job.variables}
+        cert = Certificate("closed form", self.name, errors, event_errors)
+        return result, _worst(cert, variables, np.asarray(grid, dtype=float)), resumed
+
+    def _events(self, job: Any, model: Any, prec: Precision, grid: np.ndarray) -> tuple[dict, dict]:
+        return {}, {}
 
 
 def closed_form_for(scene: Scene) -> _ClosedForm | None:
@@ -383,8 +580,65 @@ def closed_form_for(scene: Scene) -> _ClosedForm | None:
 class _FreeBody(_ClosedForm):
     name = "FreeRigidBody, Jacobi elliptic functions"
 
-    def __init__(self, scene: Scene) -> None:
-        self.scene = scene
+    def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
+        from .reference.evaluate import FreeBodyJob
+
+        variables, monitors = tuple(model.outputs), tuple(model.monitors)
+        if not (
+            set(variables) <= set(FreeBodyJob.VARIABLES)
+            and set(monitors) <= set(FreeBodyJob.MONITORS)
+            and all(e.name == "invariable_plane" for e in model.events)
+        ):
+            return None
+        body = self.scene.model
+        dps = prec.dps
+        # The attitude as the run starts it (a matrix or an unnormalised quaternion included),
+        # computed well beyond the digits asked for.
+        quaternion = body.initial_quaternion(Precision("real", int(dps * _BITS_PER_DIGIT) + 96))
+        return FreeBodyJob(
+            inertia=tuple(str(x) for x in body.inertia),
+            rates=tuple(str(x) for x in body.rates),
+            attitude=tuple(str(c) for c in quaternion),
+            dps=dps,
+            t0=t0,
+            variables=variables,
+            monitors=monitors,
+            rounding=_rounding(prec),
+        )
+
+    def _events(self, job: Any, model: Any, prec: Precision, grid: np.ndarray) -> tuple[dict, dict]:
+        """The invariable-plane crossings of the output span, as the run records them."""
+        import mpmath
+
+        from .result import EventLog
+
+        axes = [e.label for e in model.events]
+        if not axes:
+            return {}, {}
+        body = job.body()
+        rnd = job.rounding
+        t0 = rnd.read(job.t0)
+        crossings = []
+        with mpmath.workdps(job.dps + 30):
+            span = rnd.read(prec.to_text(grid[-1:])[0]) - t0
+            for axis in axes:
+                # A zero at the start time is where the run starts, not a crossing it detects.
+                crossings += [c for c in body.crossing_times(axis, 0, span) if c.time > 0]
+            crossings.sort(key=lambda c: c.time)
+            times, errors = [], []
+            for c in crossings:
+                exact = t0 + c.time
+                text, written = rnd.write(exact)
+                times.append(text)
+                # The crossing's error is scaled (relative above 1): made absolute here.
+                bound = c.error * max(1, abs(c.time)) + 2 * mpmath.eps * abs(exact)
+                errors.append(_upper(abs(written - exact) + bound))
+        log = EventLog(
+            time=prec.from_text(np.array(times, dtype=object)) if times else prec.array([]),
+            direction=np.array([c.direction for c in crossings], dtype=int),
+            label=np.array([c.axis for c in crossings], dtype=str),
+        )
+        return {"invariable_plane": log}, {"invariable_plane": np.array(errors)}
 
     def certificate(self, result: Any, digits: int) -> Certificate:
         import mpmath
@@ -405,12 +659,15 @@ class _FreeBody(_ClosedForm):
         cols: dict[str, list[float]] = {
             n: [] for n in names + (["lambda", "mu", "nu"] if has_rodrigues else [])
         }
+        prec = _precision_of(result)
+        times = _exact(t, prec)
+        columns = {n: _exact(result.variables[n], prec) for n in cols}
         with mpmath.workdps(dps + 10):
-            t0 = mpmath.mpf(str(t[0]))
+            t0 = times[0]
             for k in range(len(t)):
-                s = exact.at(mpmath.mpf(str(t[k])) - t0)
+                s = exact.at(times[k] - t0)
                 bound = max(s.errors.values())
-                got = {n: mpmath.mpf(str(result.variables[n][k])) for n in cols}
+                got = {n: columns[n][k] for n in cols}
                 exact_q = list(s.quaternion)
                 if "qw" in got:
                     # q and −q are one attitude: compare with the sign the run took.
@@ -425,39 +682,70 @@ class _FreeBody(_ClosedForm):
                         {"lambda": exact_q[1] / w, "mu": exact_q[2] / w, "nu": exact_q[3] / w}
                     )
                 for n in cols:
-                    err = abs(got[n] - want[n]) + bound * max(1, abs(want[n]))
-                    cols[n].append(float(err))
+                    if n in ("lambda", "mu", "nu"):
+                        # λ = x/w: an error b in x and w becomes b(1 + |λ|)/|w|.
+                        bound_n = bound * (1 + abs(want[n])) / abs(exact_q[0])
+                    else:
+                        bound_n = bound * max(1, abs(want[n]))
+                    # The division and the subtraction round at the working precision.
+                    rounding = 4 * mpmath.eps * (abs(want[n]) + abs(got[n]))
+                    cols[n].append(_upper(abs(got[n] - want[n]) + bound_n + rounding))
             event_errors = {}
             log = result.events.get("invariable_plane")
             if log is not None:
-                event_errors["invariable_plane"] = self._crossings(exact, log, t, t0)
+                event_errors["invariable_plane"] = self._crossings(exact, log, times[-1], t0, prec)
         errors = {n: np.array(v) for n, v in cols.items()}
         cert = Certificate("closed form", self.name, errors, event_errors)
         return _worst(cert, result.variables, np.asarray(t, dtype=float))
 
     @staticmethod
-    def _crossings(exact: Any, log: Any, t: np.ndarray, t0: Any) -> np.ndarray:
-        import mpmath
-
-        span = mpmath.mpf(str(t[-1])) - t0
-        errors = []
+    def _crossings(exact: Any, log: Any, t1: Any, t0: Any, prec: Precision) -> np.ndarray:
+        """Each recorded crossing's error, in the log's order."""
+        span = t1 - t0
+        errors = np.zeros(len(log))
         for axis in ("x1", "y1", "z1"):
-            ours = [mpmath.mpf(str(x)) - t0 for x in log.where(axis)]
+            ours = [x - t0 for x in _exact(log.where(axis), prec)]
             theirs = exact.crossing_times(axis, 0, span)
             if len(ours) != len(theirs):
                 raise RuntimeError(
                     f"invariable-plane crossings of {axis}: {len(ours)} recorded, "
                     f"{len(theirs)} in the closed form — no certificate"
                 )
-            errors += [float(abs(a - c.time) + c.error) for a, c in zip(ours, theirs, strict=True)]
-        return np.array(errors)
+            # The crossing's error is scaled (relative above 1): made absolute here.
+            errors[np.flatnonzero(log.label == axis)] = [
+                _upper(abs(a - c.time) + c.error * max(1, abs(c.time)))
+                for a, c in zip(ours, theirs, strict=True)
+            ]
+        return errors
 
 
 class _Projectile(_ClosedForm):
     name = "Hamilton's projectile, (113.)-(114.), (120.)"
 
-    def __init__(self, scene: Scene) -> None:
-        self.scene = scene
+    def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
+        from .reference.evaluate import ProjectileJob
+
+        variables, monitors = tuple(model.outputs), tuple(model.monitors)
+        if not (
+            set(variables) <= set(ProjectileJob.VARIABLES)
+            and set(monitors) <= set(ProjectileJob.MONITORS)
+            and not model.events
+        ):
+            return None
+        h = self.scene.model
+        c = h.constants
+        return ProjectileJob(
+            g=str(c["g"]),
+            mu=str(c["mu"]),
+            nu=str(c["nu"]),
+            eta=tuple(str(x) for x in h.eta),
+            varpi=tuple(str(x) for x in h.varpi),
+            dps=prec.dps,
+            t0=t0,
+            variables=variables,
+            monitors=monitors,
+            rounding=_rounding(prec),
+        )
 
     def certificate(self, result: Any, digits: int) -> Certificate:
         import mpmath
@@ -470,21 +758,35 @@ class _Projectile(_ClosedForm):
         t = result.t
         names = [n for n in result.variables if n[:-1] in ("eta", "varpi") or n == "S"]
         cols: dict[str, list[float]] = {n: [] for n in names}
+        prec = _precision_of(result)
+        times = _exact(t, prec)
+        columns = {n: _exact(result.variables[n], prec) for n in names}
         with mpmath.workdps(dps + 10):
-            t0 = mpmath.mpf(str(t[0]))
             for k in range(len(t)):
-                tk = mpmath.mpf(str(t[k])) - t0
+                tk = times[k] - times[0]
                 s = projectile_solution(c["g"], c["mu"], c["nu"], h.eta, h.varpi, tk, dps=dps)
                 want = {f"eta{i + 1}": s.eta[i] for i in range(3)}
                 want.update({f"varpi{i + 1}": s.varpi[i] for i in range(3)})
                 want["S"] = s.S
                 for n in names:
-                    got = mpmath.mpf(str(result.variables[n][k]))
+                    got = columns[n][k]
                     bound = s.errors[n] * max(1, abs(want[n]))
-                    cols[n].append(float(abs(got - want[n]) + bound))
+                    cols[n].append(_upper(abs(got - want[n]) + bound))
         errors = {n: np.array(v) for n, v in cols.items()}
         cert = Certificate("closed form", self.name, errors)
         return _worst(cert, result.variables, np.asarray(t, dtype=float))
+
+
+def _upper(x: Any) -> float:
+    from .reference.evaluate import upper
+
+    return upper(x)
+
+
+def _rounding(prec: Precision) -> Any:
+    from .reference.evaluate import Rounding
+
+    return Rounding(prec.kind, prec.bits)
 
 
 # ---------------------------------------------------------------------- files
@@ -519,6 +821,7 @@ def _environment() -> dict[str, str]:
         "platform": platform.platform(),
         "machine": platform.machine(),
         "mpmath": mpmath.__version__,
+        "mpmath_backend": mpmath.libmp.BACKEND,
         "h5py": h5py.__version__,
     }
 
@@ -571,9 +874,12 @@ def _claim_workdir(workdir: Path) -> None:
 def _remove_workdir(workdir: Path) -> None:
     """Remove what the runs wrote in ``workdir``; anything else stays, with its directory."""
     from .checkpoint import remove_checkpoints
+    from .reference.evaluate import remove_saved
 
     for run_dir in workdir.glob("run-*"):
         remove_checkpoints(run_dir)
+    for store in workdir.glob("closed-form-*"):
+        remove_saved(store)
     (workdir / WORK_MARKER).unlink(missing_ok=True)
     with contextlib.suppress(OSError):  # not empty: what is left is not ours
         workdir.rmdir()

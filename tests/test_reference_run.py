@@ -78,7 +78,7 @@ def test_two_precision_certificate_bounds_the_true_error(tmp_path):
 
 def test_closed_form_certificate_catches_a_loose_run_and_escalates(tmp_path):
     """A quad run at tolerance 1e-12 cannot carry 25 digits: the closed form says so, and the
-    precision goes up until it can."""
+    precision goes up until it can. (A tolerance asks for an integration: "auto" integrates.)"""
     out = generate_reference(free_body(), 25, tmp_path / "ref.h5", tolerance="1e-12")
     first, last = out.attempts[0], out.attempts[-1]
     assert first["tolerance"] == "1e-12" and first["scaled_error"] > 1e-20
@@ -86,6 +86,7 @@ def test_closed_form_certificate_catches_a_loose_run_and_escalates(tmp_path):
     cert = read_certificate(tmp_path / "ref.h5")
     assert cert["method"] == "closed form" and cert["digits_certified"] >= 25
     assert len(cert["event_errors"]["invariable_plane"]) > 0
+    assert ch.load_result(out.path).metadata["reference"]["method"] == "integration"
 
 
 def test_projectile_reference_matches_the_notes_and_reproduces_from_its_metadata(tmp_path):
@@ -100,7 +101,7 @@ def test_projectile_reference_matches_the_notes_and_reproduces_from_its_metadata
             assert abs(mpmath.mpf(str(ref[f"eta{i + 1}"][-1])) - mpmath.mpf(w)) < 1e-19
         assert abs(mpmath.mpf(str(ref["S"][-1])) - mpmath.mpf("-6.0981388215878366413")) < 1e-18
     meta = ref.metadata["reference"]
-    assert meta["digits"] == 30 and meta["certified"] and meta["stretches"] == 64
+    assert meta["digits"] == 30 and meta["certified"] and meta["method"] == "closed form"
     assert meta["environment"]["mpmath"] and ref.metadata["heyoka"]
     again = generate_reference(ch.Scene.from_dict(ref.scene), meta["digits"], tmp_path / "b.h5")
     twin = ch.load_result(again.path)
@@ -172,6 +173,8 @@ def _command(scene: Path, out: Path) -> list[str]:
         str(scene),
         "--digits",
         "25",
+        "--certificate",
+        "integrate",
         "--out",
         str(out),
         "--no-progress",

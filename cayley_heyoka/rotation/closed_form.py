@@ -779,14 +779,17 @@ class FreeRigidBody:
         index = AXES.index(axis)
         with mpmath.workdps(self.dps + 20):
             found = self._constants(self.dps + 20).crossing_indices(index, t0, t1)
-        crossings = []
-        for j, direction in found:
-            cert = self._certify(
-                lambda c, _w, j=j: {"time": c.crossing_time(index, j)},
-                f"crossing {axis} #{j}",
-                self._span_digits(t1),
-            )
-            crossings.append(Crossing(cert.values["time"], direction, axis, cert.errors["time"]))
+        # One certified evaluation of them all: each time keeps its own error estimate, and the
+        # per-call cost (two sets of constants looked up, a message built) is paid once.
+        cert = self._certify(
+            lambda c, _w: {str(j): c.crossing_time(index, j) for j, _ in found},
+            f"crossings of {axis}",
+            self._span_digits(t1),
+        )
+        crossings = [
+            Crossing(cert.values[str(j)], direction, axis, cert.errors[str(j)])
+            for j, direction in found
+        ]
         return sorted((x for x in crossings if t0 <= x.time <= t1), key=lambda x: x.time)
 
     def psi_by_quadrature(
