@@ -321,9 +321,12 @@ def generate_reference(
                 "worst": list(cert.worst),
             }
         )
+        where = cert.worst[0]
+        if math.isfinite(cert.worst[1]):  # an event's error is of its time, not at an output
+            where += f" at t = {cert.worst[1]:.6g}"
         say(
             f"certificate: {cert.digits():.1f} digits (largest scaled error {cert.scaled:.2e} "
-            f"in {cert.worst[0]} at t = {cert.worst[1]:.6g})"
+            f"in {where})"
         )
         if cert.scaled <= 10.0**-digits:
             break

@@ -241,3 +241,18 @@ def test_ctrl_c_ends_workers_and_the_same_command_resumes_to_the_same_bits(tmp_p
     ca, cb = read_certificate(out), read_certificate(whole.path)
     for name, err in ca["errors"].items():
         assert np.array_equal(err, cb["errors"][name]), name
+
+
+def test_the_command_line_passes_workers(tmp_path):
+    """``--workers N`` reaches the evaluation (a count below 1 is refused by name)."""
+    from cayley_heyoka.cli import main
+
+    path = tmp_path / "body.toml"
+    path.write_text(FREE_BODY.format(stop="30.0", count=PARALLEL_FROM + 16, attitude=""))
+    one, two = tmp_path / "one.h5", tmp_path / "two.h5"
+    argv = ["reference", str(path), "--digits", "25", "--no-progress"]
+    assert main([*argv, "--out", str(one), "--workers", "1"]) == 0
+    assert main([*argv, "--out", str(two), "--workers", "2"]) == 0
+    _same_bits(ch.load_result(one), ch.load_result(two))
+    with pytest.raises(SystemExit):
+        main([*argv, "--out", str(tmp_path / "x.h5"), "--workers", "0"])

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 # nothing of it; tests/test_cli_imports.py holds them equal to reference_run's.
 MAX_BITS = 1024
 STRETCHES = 64
-METHODS = ("auto", "closed-form", "two-precisions")
+METHODS = ("auto", "closed-form", "integrate", "two-precisions")
 
 
 def add_parser(subparsers: Any) -> None:
@@ -27,9 +27,11 @@ def add_parser(subparsers: Any) -> None:
         "reference",
         help="write a certified reference solution of a scene (resumable)",
         description=(
-            "Integrate SCENE to DIGITS certified digits at its output times and write the "
-            "solution with its error certificate. Interrupted (Ctrl-C, or killed), the same "
-            "command continues from its last checkpoint and writes the same bits."
+            "Write SCENE's solution at its output times to DIGITS certified digits, with its "
+            "error certificate: the closed form where the scene has one (torque-free body, "
+            "Hamilton's projectile), evaluated in parallel; else an integration certified by a "
+            "second precision. Interrupted (Ctrl-C, or killed), the same command continues "
+            "from its last checkpoint and writes the same bits."
         ),
     )
     p.add_argument("scene", type=Path, help="scene TOML file")
@@ -47,7 +49,18 @@ def add_parser(subparsers: Any) -> None:
         "--certificate",
         choices=METHODS,
         default="auto",
-        help="closed-form (where there is one), two-precisions, or auto (the first that applies)",
+        help=(
+            "auto (the closed form where there is one and no --tolerance is given, else "
+            "integrate), closed-form (evaluate it), integrate (integrate, certified by the "
+            "closed form where there is one, else by a second precision), two-precisions"
+        ),
+    )
+    p.add_argument(
+        "--workers",
+        type=_positive_int,
+        default=None,
+        help="processes evaluating a closed form (default: every core; same bits whatever "
+        "the count)",
     )
     p.add_argument("--keep-work", action="store_true", help="keep the work directory")
     p.add_argument(
@@ -57,6 +70,16 @@ def add_parser(subparsers: Any) -> None:
     )
     add_progress(p)
     p.set_defaults(handler=command)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}")
+    return value
 
 
 def command(args: argparse.Namespace) -> int:
@@ -90,6 +113,7 @@ def _reference(args: argparse.Namespace) -> int:
             keep_work=args.keep_work,
             overwrite=args.overwrite,
             method=args.certificate,
+            workers=args.workers,
             progress=bar.update if bar else None,
             report=print,
             command=["cayley-heyoka", *sys.argv[1:]],

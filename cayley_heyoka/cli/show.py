@@ -48,10 +48,14 @@ def summary(result: Result) -> str:
     status = "completed" if result.success else "STOPPED EARLY"
     t_last = f"{float(result.t[-1]):.6g}" if len(result.t) else "-"
     lines.append(f"  status        {status}: {result.message}")
-    lines.append(
-        f"  precision     {result.precision.name}, tolerance {meta.get('tolerance')}, "
-        f"order {meta.get('order')}"
-    )
+    if meta.get("tolerance") is None and meta.get("order") is None:
+        # A closed form's values (cayley-heyoka reference): no integrator made them.
+        lines.append(f"  precision     {result.precision.name}, no integration")
+    else:
+        lines.append(
+            f"  precision     {result.precision.name}, tolerance {meta.get('tolerance')}, "
+            f"order {meta.get('order')}"
+        )
     lines.append(f"  outputs       {len(result.t)} times, last t = {t_last}")
     for name, value in counters.items():
         lines.append(f"  {name:<13} {value}")
