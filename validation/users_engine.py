@@ -8,7 +8,10 @@ Rows (issue 16's table, each ours ÷ its floor, timed interleaved in one process
   quaternion);
 * ``run_sweep`` of a conservation study of free bodies (the bundled random study, its member
   count raised) — against a hand-written heyoka batch integrator of the same equations looping
-  over the members on one thread, recording the same output times.
+  over the members on one thread, recording the same output times;
+* ``run_sweep`` of members with terminal events (Cayley's orbit, a Rodrigues chart), batched in
+  lanes with their handlers — against ``run()`` of each member on every core, the path such
+  sweeps took before (no hand-written floor: the handlers are the point).
 
     python validation/users_engine.py [--quick]
 """
@@ -145,8 +148,68 @@ def sweep(quick: bool) -> list[Row]:
     ]
 
 
+def terminal_sweep(quick: bool) -> list[Row]:
+    """Members whose terminal events act between steps, in lanes against run() per member."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    cases = {
+        "Cayley's orbit (ρ's revolutions), J2": {
+            "orbit": {
+                "mu": "1",
+                "position": ["0.9", "0.2", "0.1"],
+                "velocity": ["-0.25", "0.85", "0.45"],
+                "formulation": "cayley",
+            },
+            "perturbations": {
+                "zonal": {"J2": "1.0826e-3", "radius": "0.8", "axis": ["0", "0", "1"]}
+            },
+            "output": {"times": {"start": "0", "stop": "60", "count": "61"}},
+        },
+        "free body in Rodrigues parameters (chart re-basings)": {
+            "body": {"inertia": ["1", "1.5", "2.5"]},
+            "initial": {"rates": ["0.3", "1", "0.5"], "rodrigues": ["0.1", "0.2", "-0.3"]},
+            "attitude": {"formulation": "rodrigues"},
+            "output": {"times": {"start": "0", "stop": "100", "count": "101"}},
+        },
+    }
+    members = 32 if quick else 256
+    rows = []
+    for label, scene in cases.items():
+        path = "orbit.velocity[1]" if "orbit" in scene else "initial.rates[0]"
+        base = 0.85 if "orbit" in scene else 0.3
+        values = [f"{base * (1 + 0.05 * k / members):.6f}" for k in range(members)]
+        study = Study.from_dict(
+            {"scene": scene, "sweep": {"kind": "grid", "parameters": {path: values}}}
+        )
+        listed = list(enumerate(study.members()))
+        run_sweep(study)  # compile both ways
+        ch.run(study.member_scene(*listed[0]))
+
+        def floor(study=study, listed=listed) -> None:
+            # As the sweep does, and as the sweep did before: each member's scene made from the
+            # study (validated), then run().
+            with ThreadPoolExecutor() as pool:
+                list(pool.map(lambda m: ch.run(study.member_scene(*m)), listed))
+
+        result = run_sweep(study)
+        ratios, ours, raw = interleaved(
+            lambda study=study: run_sweep(study), floor, repeats=3 if quick else 5
+        )
+        rows.append(
+            Row(
+                f"`run_sweep`: {members} members with terminal events, {label}",
+                ratios,
+                1.0,
+                "`run()` of each member on every core (threads)",
+                f"{int(result.steps.sum()) // members} steps a member; paths "
+                f"{result.metadata['paths']}",
+            )
+        )
+    return rows
+
+
 def rows(quick: bool) -> list[Row]:
-    return short_runs(quick) + sweep(quick)
+    return short_runs(quick) + sweep(quick) + terminal_sweep(quick)
 
 
 def main() -> None:
