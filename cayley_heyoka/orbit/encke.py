@@ -148,13 +148,18 @@ class Encke:
     def acceleration(
         self, y: Sequence[Expr], d: Sequence[Expr], parts: dict[str, Expr]
     ) -> list[Expr]:
-        """The Kepler part of δ̈, μ/(ρ³S³) (F(q) y − δ) − (n²/D³) F(p) y (Battin)."""
+        """The Kepler part of δ̈, μ/(ρ³S³) (F(q) y − δ) − (n²/D³) F(p) y (Battin).
+
+        Adds ``parts["r2"] = ρ² (1 + q) = |y + δ|²``, built of the same subexpressions, for
+        the disturbing force at y + δ.
+        """
         p = self.par
         u, w, D = parts["u"], parts["w"], parts["D"]
         rho2 = _dot(y, y)
         mismatch = p["alpha"] * u * u + p["beta"] * w * w - 2.0 * p["gamma"] * u * w
         Fp = 1.5 * mismatch / rho2
         q = (2.0 * _dot(y, d) + _dot(d, d)) / rho2
+        parts["r2"] = rho2 * (1.0 + q)
         S = hy.sqrt(1.0 + q)
         Fq = q * (1.0 + S + S * S) / (1.0 + S)
         rS = hy.sqrt(rho2) * S  # |y + δ|
