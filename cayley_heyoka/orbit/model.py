@@ -234,14 +234,11 @@ class _Builder:
         y, ydot, parts = en.curve(psi)
         self.position = [y[i] + d[i] for i in range(3)]
         self.velocity = [ydot[i] + dv[i] for i in range(3)]
-        acc = en.acceleration(y, d, parts)
-        g = self.force(self.position, parts["r2"])
+        # ∇Ω at y + δ: its part along the position joins the Kepler part's coefficients.
+        g = self.force(self.position, en.distance(y, d, parts))
+        acc = en.acceleration(y, d, parts, None if g is None else _total(g.central))
         if g is not None:
-            # ∇Ω at y + δ; its part along the position is −Σ central (y + δ).
-            central = _total(g.central)
             for i in range(3):
-                if central is not None:
-                    acc[i] = acc[i] - central * self.position[i]
                 gi = g.component(i)
                 if gi is not None:
                     acc[i] = acc[i] + gi
