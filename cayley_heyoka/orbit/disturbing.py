@@ -179,22 +179,24 @@ class Zonal:
 
         ``x`` is the position and ``r2 = |x|²``; or, with ``radius`` r given, ``x`` is the
         unit vector x̂ (r2 unused) and the same sums are written in w = k̂·x̂ with r = 1,
-        times ``Cₙ r⁻ⁿ⁻²``: then ``central`` multiplies −x̂, not −x (:class:`Gradient`).
+        times ``Cₙ r⁻ⁿ⁻²``; then the part along x̂ is given as ∂Ω/∂r = −(n + 1) Ωₙ/r
+        (``radial``, :class:`Gradient`), which needs no Wₙ.
         """
         s = self._axial(x, ctx)
         C = {n: hy.par[ctx.pars.index(f"zonal.C{n}")] for n, _ in self.coefficients}
-        central, along = [], []
+        central, along, radial = [], [], []
         t_prev, t, u = None, s, None  # T₀ = 1, T₁ = s, U₁ = 1 (None: the number 1)
         for k in range(1, max(C) + 1):
             if k in C:
-                w = (k + 1) * t + s * u
                 if radius is None:
+                    # s U₂ = 6 s²: the s·s of |x|², not a product of its own.
+                    w = (k + 1) * t + (6 * (s * s) if k == 2 else s * u)
                     along.append(C[k] * u * r2 ** (-(k + 0.5)))
                     central.append(C[k] * w * r2 ** (-(k + 1.5)))
                 else:
                     scale = C[k] * radius ** (-(k + 2))
                     along.append(scale * u)
-                    central.append(scale * w)
+                    radial.append(scale * (-(k + 1) * t))
             # Tₖ₊₁ = (2k + 1) s Tₖ − k² r² Tₖ₋₁ and Uₖ₊₁, written so that s·s and r² are
             # the ones of |x|² (heyoka shares equal subexpressions).
             if radius is not None:  # r = 1
@@ -211,7 +213,7 @@ class Zonal:
             sign = exact_fraction(self.axis[axis]) > 0
             g = _sum(along) if sign else -_sum(along)
             vector = [[g] if i == axis else [] for i in range(3)]
-        return Gradient(central, vector)
+        return Gradient(central, vector, radial if radius is not None else None)
 
 
 @dataclass(frozen=True)
@@ -438,10 +440,14 @@ class Gradient:
         Scalar terms whose sum multiplies −x.
     vector
         For each coordinate, the terms to add (an empty list for none).
+    radial
+        On the unit sphere (:func:`force` with the radius given): ∂Ω/∂r = x̂·∇Ω as terms to
+        add, complete (``central`` is then empty); None otherwise.
     """
 
     central: list[Expr]
     vector: list[list[Expr]]
+    radial: list[Expr] | None = None
 
     def component(self, i: int) -> Expr | None:
         """The vector part's coordinate ``i``, or None where it is zero."""
@@ -458,14 +464,14 @@ def force(
     radius: Expr | None = None,
 ) -> Gradient:
     """∇Ω at the position ``x`` (with ``r2 = |x|²`` as the formulation writes it), or, with
-    ``radius`` r given, at ``r x`` for the unit vector ``x`` (``central`` then multiplies
-    −x̂: :meth:`Zonal.gradient`).
+    ``radius`` r given, at ``r x`` for the unit vector ``x``, with ∂Ω/∂r in ``radial``
+    (:meth:`Zonal.gradient`).
 
     ``omegas`` are the terms' Ω on the Cartesian placeholders ``X`` (built once, for the
     monitors): a term without a closed-form gradient is differentiated by heyoka and composed
     with the position.
     """
-    total = Gradient([], [[], [], []])
+    total = Gradient([], [[], [], []], None if radius is None else [])
     position = list(x) if radius is None else [radius * c for c in x]
     subs = None if position == list(X) else {str(a): b for a, b in zip(X, position, strict=True)}
     for term, omega in zip(terms, omegas, strict=True):
@@ -476,7 +482,11 @@ def force(
             if subs is not None:
                 parts = [hy.subs(p, subs) for p in parts]
             g = Gradient([], [[p] for p in parts])
+            if radius is not None:
+                g.radial = [_sum([c * p for c, p in zip(x, parts, strict=True)])]
         total.central += g.central
+        if total.radial is not None:
+            total.radial += g.radial
         for i in range(3):
             total.vector[i] += g.vector[i]
     return total

@@ -188,7 +188,7 @@ class Encke:
         mismatch = p["alpha"] * (u * u) + p["beta"] * (w * w) - 2.0 * p["gamma"] * (u * w)
         parts["mismatch"] = mismatch
         parts["rho2"] = p["k2"] * (D * D) - mismatch
-        parts["N"] = _dot([2.0 * y[i] + d[i] for i in range(3)], d)  # 2 y·δ + δ·δ
+        parts["N"] = hy.sum([(2.0 * y[i] + d[i]) * d[i] for i in range(3)])  # 2 y·δ + δ·δ
         parts["r2"] = parts["rho2"] + parts["N"]
         return parts["r2"]
 
@@ -413,6 +413,5 @@ def _ellipse(ar: Any, p: dict[str, Any], E: Any) -> tuple[list, list]:
 
 
 def _dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
-    if isinstance(a[0], hy.expression) or isinstance(b[0], hy.expression):
-        return hy.sum([a[i] * b[i] for i in range(3)])
+    """a · b of numbers (the handler's; the equations write their sums with ``hy.sum``)."""
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]

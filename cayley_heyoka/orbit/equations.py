@@ -121,11 +121,11 @@ def in_plane_rates(
     r: Expr, rdot: Expr, h: Expr, mu: Expr, Omega_r: Expr | None, Omega_rho: Expr | None
 ) -> list[Expr]:
     """dr/dt, dṙ/dt, dρ/dt, dh/dt (§6.3; the radial sign is the corrected one, OCR item 3)."""
-    r2 = r * r
-    rho_rate = h / r2
+    inv_r2 = r**-2.0
+    rho_rate = h * inv_r2
     # h²/r³ = ρ̇² r: two products on ρ̇, which is computed anyway, instead of h², r³ and a
-    # division.
-    radial = rho_rate * rho_rate * r - mu / r2
+    # division; 1/r² once for ρ̇ and μ/r².
+    radial = rho_rate * rho_rate * r - mu * inv_r2
     if Omega_r is not None:
         radial = radial + Omega_r
     return [rdot, radial, rho_rate, Omega_rho if Omega_rho is not None else _ZERO]
@@ -169,14 +169,18 @@ def quaternion_rates(q: Sequence[Expr], rho: Expr, h: Expr, Omega_beta: Expr | N
 def cayley_partials(g: Gradient, r: Expr, axes: OrbitAxes) -> tuple[Expr, Expr, Expr]:
     """∂Ω/∂r, ∂Ω/∂ρ and Ω_β from the Cartesian gradient at r x̂₃ (§7).
 
-    ``g`` is ∇Ω = −c x̂₃ + g′ (:func:`.disturbing.force` with the radius given): the part along
-    x̂₃ enters ∂Ω/∂r only, since ŷ₃ and n̂ are perpendicular to it.
+    ``g`` is ∇Ω at r x̂₃ (:func:`.disturbing.force` with the radius given), which carries
+    ∂Ω/∂r (``g.radial``); its part along x̂₃ does not enter ∂Ω/∂ρ and Ω_β, ŷ₃ and n̂ being
+    perpendicular to it.
     """
     vector = [g.component(i) for i in range(3)]
-    Omega_r = _sparse_dot(axes.radial, vector)
-    if g.central:
-        along = _total(g.central)
-        Omega_r = -along if Omega_r is None else Omega_r - along
+    if g.radial is not None:
+        Omega_r = _total(g.radial) if g.radial else None
+    else:
+        Omega_r = _sparse_dot(axes.radial, vector)
+        if g.central:
+            along = _total(g.central)
+            Omega_r = -along if Omega_r is None else Omega_r - along
     if sum(c is not None for c in vector) == 1:
         # One component (a zonal field about a coordinate axis): r times it once, not twice.
         scaled = [None if c is None else r * c for c in vector]

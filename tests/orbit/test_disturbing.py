@@ -152,8 +152,8 @@ def test_zonal_and_series_carry_no_double_constant_into_quad():
 @pytest.mark.parametrize("on_sphere", [False, True])
 def test_closed_form_zonal_gradient_is_the_symbolic_one(axis, on_sphere):
     """The closed form the equations compile (one power of r per term; :meth:`Zonal.gradient`),
-    in Cartesian form and on the unit sphere times r (Cayley's), against heyoka's derivative of
-    Ω, degrees 2 to 12 with gaps."""
+    in Cartesian form and on the unit sphere with ∂Ω/∂r apart (Cayley's), against heyoka's
+    derivative of Ω, degrees 2 to 12 with gaps."""
     coefficients = ((2, "1.0826e-3"), (3, "-2.5e-6"), (4, "-1.6e-6"), (7, "3e-7"), (12, "2e-8"))
     term = Zonal(coefficients, "0.8", tuple(str(c) for c in axis))
     pars = ParTable()
@@ -162,18 +162,21 @@ def test_closed_form_zonal_gradient_is_the_symbolic_one(axis, on_sphere):
     x = list(hy.make_vars("x", "y", "z"))
     omega = term.omega(x, ctx)
     if on_sphere:
+        # ∂Ω/∂r given apart; the vector part counts only across x̂:
+        # ∇Ω = x̂ ∂Ω/∂r + g − x̂ (x̂·g).
         r = hy.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
         unit = [c / r for c in x]
         g = term.gradient(unit, None, ctx, radius=r)
-        along = unit
+        vec = [g.component(i) if g.component(i) is not None else 0.0 for i in range(3)]
+        across = hy.sum(g.radial) - hy.sum([unit[i] * vec[i] for i in range(3)])
+        closed = [unit[i] * across + vec[i] for i in range(3)]
     else:
         g = term.gradient(x, x[0] * x[0] + x[1] * x[1] + x[2] * x[2], ctx)
-        along = x
-    central = hy.sum(g.central)
-    closed = [
-        -central * along[i] + (g.component(i) if g.component(i) is not None else 0.0)
-        for i in range(3)
-    ]
+        central = hy.sum(g.central)
+        closed = [
+            -central * x[i] + (g.component(i) if g.component(i) is not None else 0.0)
+            for i in range(3)
+        ]
     cf = hy.cfunc([*closed, *gradient(omega, x)], x)
     values = np.array([float(v) for v in pars.values])
     for p in X:
