@@ -3,9 +3,10 @@
 Ω is Cayley's disturbing function (Cayley 1860; docs/orbits.md): the force function is
 ``V = μ/r + Ω`` and the perturbing acceleration is ``+∇Ω`` (the sign of most modern texts, minus
 Laplace's R). Each term below is written as a heyoka expression of the position ``x`` in frame 0
-and of time; its gradient is taken by heyoka's symbolic differentiation (:func:`gradient`), and
-Cayley's partial derivatives follow from it by the chain rule through the frame tables
-(:mod:`.equations`).
+and of time. The equations use its gradient (:func:`force`): the zonal harmonics in closed form,
+one power of r² per term over a shared r², the other terms by heyoka's symbolic differentiation
+(:func:`gradient`); Cayley's partial derivatives follow from it by the chain rule through the
+frame tables (:mod:`.equations`).
 Only the terms a scene names are built, and their numbers are runtime parameters, so two
 scenes differing only in numbers share one compiled integrator.
 
@@ -134,7 +135,11 @@ class Zonal:
         return frames.dot(self.unit_axis(ctx), x)
 
     def unit_axis(self, ctx: Context) -> list[Expr]:
-        """k̂ as three parameters, normalised in mpmath (``zonal.axis_unit[i]``)."""
+        """k̂ as three parameters, normalised in mpmath (``zonal.axis_unit[i]``), allocated on
+        first use (Ω and its gradient share them)."""
+        names = [f"zonal.axis_unit[{i}]" for i in range(3)]
+        if names[0] in ctx.pars.names:
+            return [hy.par[ctx.pars.index(name)] for name in names]
         k = [ctx.exact(c) for c in self.axis]
         return [
             ctx.constant(f"zonal.axis_unit[{i}]", lambda i=i: k[i] / mpmath.norm(k))
@@ -154,6 +159,61 @@ class Zonal:
             # Cₙ (n! rⁿ Pₙ(s/r)) / r²ⁿ⁺¹, with r²ⁿ⁺¹ as a power of r² (cheap in Taylor form).
             terms.append(Cn * legendre_scaled(n, s, r2) * r2 ** (-(n + 0.5)))
         return _sum(terms)
+
+    def gradient(
+        self, x: Sequence[Expr], r2: Expr | None, ctx: Context, radius: Expr | None = None
+    ) -> Gradient:
+        """∇Ω in closed form, with one power of r per term (after :meth:`omega`, whose
+        parameters it uses).
+
+        With ``Tₙ = n! rⁿ Pₙ(s/r)`` and ``Uₙ = ∂Tₙ/∂s`` at fixed r, and ``Cₙ = −μ Jₙ Rⁿ/n!``::
+
+            ∇(Cₙ Tₙ / r²ⁿ⁺¹) = Cₙ (Uₙ k̂ / r²ⁿ⁺¹ − Wₙ x / r²ⁿ⁺³),   Wₙ = (n + 1) Tₙ + s Uₙ
+
+        (from ``∇Ωₙ ∝ r⁻ⁿ⁻² (Pₙ′(w) k̂ − Pₙ₊₁′(w) x̂)``, w = s/r, and
+        ``Pₙ₊₁′ = (n + 1) Pₙ + w Pₙ′``), with ``Uₖ₊₁ = (k + 1)((k + 1) Tₖ + s Uₖ)``: integer
+        coefficients, no division, and Bonnet's recurrence for Tₖ, stable at any degree.
+        heyoka's symbolic gradient of :meth:`omega` keeps three powers of r² per term and the
+        derivative of r² spelt out for each coordinate (Kepler + J2: 55 entries in heyoka's
+        decomposition against 40 for the system written by hand; this form, 37).
+
+        ``x`` is the position and ``r2 = |x|²``; or, with ``radius`` r given, ``x`` is the
+        unit vector x̂ (r2 unused) and the same sums are written in w = k̂·x̂ with r = 1,
+        times ``Cₙ r⁻ⁿ⁻²``; then the part along x̂ is given as ∂Ω/∂r = −(n + 1) Ωₙ/r
+        (``radial``, :class:`Gradient`), which needs no Wₙ.
+        """
+        s = self._axial(x, ctx)
+        C = {n: hy.par[ctx.pars.index(f"zonal.C{n}")] for n, _ in self.coefficients}
+        central, along, radial = [], [], []
+        t_prev, t, u = None, s, None  # T₀ = 1, T₁ = s, U₁ = 1 (None: the number 1)
+        for k in range(1, max(C) + 1):
+            if k in C:
+                if radius is None:
+                    # s U₂ = 6 s²: the s·s of |x|², not a product of its own.
+                    w = (k + 1) * t + (6 * (s * s) if k == 2 else s * u)
+                    along.append(C[k] * u * r2 ** (-(k + 0.5)))
+                    central.append(C[k] * w * r2 ** (-(k + 1.5)))
+                else:
+                    scale = C[k] * radius ** (-(k + 2))
+                    along.append(scale * u)
+                    radial.append(scale * (-(k + 1) * t))
+            # Tₖ₊₁ = (2k + 1) s Tₖ − k² r² Tₖ₋₁ and Uₖ₊₁, written so that s·s and r² are
+            # the ones of |x|² (heyoka shares equal subexpressions).
+            if radius is not None:  # r = 1
+                below = hy.expression(1.0) if t_prev is None else k * k * t_prev
+            else:
+                below = r2 if t_prev is None else k * k * (r2 * t_prev)
+            u = 6 * s if k == 1 else (k + 1) * ((k + 1) * t + s * u)
+            t_prev, t = t, (2 * k + 1) * (s * t) - below
+        axis = self.coordinate_axis()
+        if axis is None:
+            g = _sum(along)
+            vector = [[g * c] for c in self.unit_axis(ctx)]
+        else:
+            sign = exact_fraction(self.axis[axis]) > 0
+            g = _sum(along) if sign else -_sum(along)
+            vector = [[g] if i == axis else [] for i in range(3)]
+        return Gradient(central, vector, radial if radius is not None else None)
 
 
 @dataclass(frozen=True)
@@ -352,12 +412,84 @@ def disturbing_function(terms: Sequence[Any], x: Sequence[Expr], ctx: Context) -
     """Ω(x, t) of the given terms, or None when there is none (pure Kepler motion)."""
     if not terms:
         return None
-    return _sum([term.omega(x, ctx) for term in terms])
+    return _sum(term_functions(terms, x, ctx))
+
+
+def term_functions(terms: Sequence[Any], x: Sequence[Expr], ctx: Context) -> list[Expr]:
+    """Each term's Ω(x, t), allocating its parameters."""
+    return [term.omega(x, ctx) for term in terms]
 
 
 def gradient(Omega: Expr, x: Sequence[Expr]) -> list[Expr]:
     """∇Ω with respect to the Cartesian variables ``x`` (symbolic, by heyoka)."""
     return [hy.diff(Omega, xi) for xi in x]
+
+
+@dataclass
+class Gradient:
+    """∇Ω as the equations use it: ``−Σ central · x + Σ vector`` (x̂ for x where the
+    position is given as r x̂: :func:`force`).
+
+    The part along the position is kept apart, so that the equations add it to the Kepler
+    term's ``μ/r³`` and multiply x once (Cartesian and Encke), or drop it where the position
+    is perpendicular (Cayley's ∂Ω/∂ρ and Ω_β).
+
+    Attributes
+    ----------
+    central
+        Scalar terms whose sum multiplies −x.
+    vector
+        For each coordinate, the terms to add (an empty list for none).
+    radial
+        On the unit sphere (:func:`force` with the radius given): ∂Ω/∂r = x̂·∇Ω as terms to
+        add, complete (``central`` is then empty); None otherwise.
+    """
+
+    central: list[Expr]
+    vector: list[list[Expr]]
+    radial: list[Expr] | None = None
+
+    def component(self, i: int) -> Expr | None:
+        """The vector part's coordinate ``i``, or None where it is zero."""
+        return _sum(self.vector[i]) if self.vector[i] else None
+
+
+def force(
+    terms: Sequence[Any],
+    omegas: Sequence[Expr],
+    X: Sequence[Expr],
+    x: Sequence[Expr],
+    r2: Expr | None,
+    ctx: Context,
+    radius: Expr | None = None,
+) -> Gradient:
+    """∇Ω at the position ``x`` (with ``r2 = |x|²`` as the formulation writes it), or, with
+    ``radius`` r given, at ``r x`` for the unit vector ``x``, with ∂Ω/∂r in ``radial``
+    (:meth:`Zonal.gradient`).
+
+    ``omegas`` are the terms' Ω on the Cartesian placeholders ``X`` (built once, for the
+    monitors): a term without a closed-form gradient is differentiated by heyoka and composed
+    with the position.
+    """
+    total = Gradient([], [[], [], []], None if radius is None else [])
+    position = list(x) if radius is None else [radius * c for c in x]
+    subs = None if position == list(X) else {str(a): b for a, b in zip(X, position, strict=True)}
+    for term, omega in zip(terms, omegas, strict=True):
+        if hasattr(term, "gradient"):
+            g = term.gradient(x, r2, ctx, radius)
+        else:
+            parts = gradient(omega, X)
+            if subs is not None:
+                parts = [hy.subs(p, subs) for p in parts]
+            g = Gradient([], [[p] for p in parts])
+            if radius is not None:
+                g.radial = [_sum([c * p for c, p in zip(x, parts, strict=True)])]
+        total.central += g.central
+        if total.radial is not None:
+            total.radial += g.radial
+        for i in range(3):
+            total.vector[i] += g.vector[i]
+    return total
 
 
 def _sum(terms: Sequence[Expr]) -> Expr:

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import heyoka as hy
 
 from . import frames
+from .disturbing import Gradient
 
 Expr = hy.expression
 _ZERO = hy.expression(0.0)
@@ -120,11 +121,14 @@ def in_plane_rates(
     r: Expr, rdot: Expr, h: Expr, mu: Expr, Omega_r: Expr | None, Omega_rho: Expr | None
 ) -> list[Expr]:
     """dr/dt, dṙ/dt, dρ/dt, dh/dt (§6.3; the radial sign is the corrected one, OCR item 3)."""
-    r2 = r * r
-    radial = h * h / (r2 * r) - mu / r2
+    inv_r2 = r**-2.0
+    rho_rate = h * inv_r2
+    # h²/r³ = ρ̇² r: two products on ρ̇, which is computed anyway, instead of h², r³ and a
+    # division; 1/r² once for ρ̇ and μ/r².
+    radial = rho_rate * rho_rate * r - mu * inv_r2
     if Omega_r is not None:
         radial = radial + Omega_r
-    return [rdot, radial, h / r2, Omega_rho if Omega_rho is not None else _ZERO]
+    return [rdot, radial, rho_rate, Omega_rho if Omega_rho is not None else _ZERO]
 
 
 def plane_rates(
@@ -134,10 +138,11 @@ def plane_rates(
     sP, cP = hy.sin(Phi), hy.cos(Phi)
     dTheta, dSigma, dPhi = [], [], []
     if Omega_beta is not None:
-        lift = hy.sin(u) * Omega_beta / (h * sP)
+        turn = Omega_beta / h  # the orbit frame's angular velocity about x̂₃, shared
+        lift = hy.sin(u) * turn / sP
         dTheta.append(lift)
         dSigma.append(cP * lift)
-        dPhi.append(hy.cos(u) * Omega_beta / h)
+        dPhi.append(hy.cos(u) * turn)
     if plane is not None:
         A, B, C = plane.rates_on_node(Theta)
         if B is not None:
@@ -161,25 +166,53 @@ def quaternion_rates(q: Sequence[Expr], rho: Expr, h: Expr, Omega_beta: Expr | N
     return [-(x * wx + y * wy), w0 * wx - z * wy, w0 * wy + z * wx, x * wy - y * wx]
 
 
-def cayley_partials(g: Sequence[Expr], r: Expr, axes: OrbitAxes) -> tuple[Expr, Expr, Expr]:
-    """∂Ω/∂r, ∂Ω/∂ρ and Ω_β from the Cartesian gradient (§7)."""
-    return (
-        frames.dot(axes.radial, g),
-        r * frames.dot(axes.transverse, g),
-        r * frames.dot(axes.normal, g),
-    )
+def cayley_partials(g: Gradient, r: Expr, axes: OrbitAxes) -> tuple[Expr, Expr, Expr]:
+    """∂Ω/∂r, ∂Ω/∂ρ and Ω_β from the Cartesian gradient at r x̂₃ (§7).
+
+    ``g`` is ∇Ω at r x̂₃ (:func:`.disturbing.force` with the radius given), which carries
+    ∂Ω/∂r (``g.radial``); its part along x̂₃ does not enter ∂Ω/∂ρ and Ω_β, ŷ₃ and n̂ being
+    perpendicular to it.
+    """
+    vector = [g.component(i) for i in range(3)]
+    if g.radial is not None:
+        Omega_r = _total(g.radial) if g.radial else None
+    else:
+        Omega_r = _sparse_dot(axes.radial, vector)
+        if g.central:
+            along = _total(g.central)
+            Omega_r = -along if Omega_r is None else Omega_r - along
+    if sum(c is not None for c in vector) == 1:
+        # One component (a zonal field about a coordinate axis): r times it once, not twice.
+        scaled = [None if c is None else r * c for c in vector]
+        rho, beta = _sparse_dot(axes.transverse, scaled), _sparse_dot(axes.normal, scaled)
+    else:
+        rho, beta = _sparse_dot(axes.transverse, vector), _sparse_dot(axes.normal, vector)
+        rho = None if rho is None else r * rho
+        beta = None if beta is None else r * beta
+    return tuple(c if c is not None else _ZERO for c in (Omega_r, rho, beta))
 
 
 def cartesian_rates(
-    x: Sequence[Expr], v: Sequence[Expr], mu: Expr, g: Sequence[Expr] | None
+    x: Sequence[Expr], v: Sequence[Expr], mu: Expr, g: Gradient | None
 ) -> list[Expr]:
-    """ẋ = v, v̇ = −μ x/r³ + ∇Ω."""
+    """ẋ = v, v̇ = −(μ/r³ + c) x + g for ∇Ω = −c x + g: the part of ∇Ω along x joins the
+    Kepler term, so that x is multiplied once."""
     r2 = frames.dot(x, x)
-    k = mu * r2**-1.5
-    acc = [-k * xi for xi in x]
+    central = [mu * r2**-1.5, *(g.central if g is not None else [])]
+    k = -_total(central)
+    acc = [k * xi for xi in x]
     if g is not None:
-        acc = [a + gi for a, gi in zip(acc, g, strict=True)]
+        for i in range(3):
+            gi = g.component(i)
+            if gi is not None:
+                acc[i] = acc[i] + gi
     return [*v, *acc]
+
+
+def _sparse_dot(a: Sequence[Expr], b: Sequence[Expr | None]) -> Expr | None:
+    """a · b over the components of b that are not None (None if all are)."""
+    terms = [ai * bi for ai, bi in zip(a, b, strict=True) if bi is not None]
+    return _total(terms) if terms else None
 
 
 def _total(terms: list[Expr]) -> Expr:

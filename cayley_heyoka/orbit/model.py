@@ -9,9 +9,10 @@
   terminal event (:mod:`.encke`); the same force model as ``cartesian``, with its rounding
   carried by a state ~10⁻⁴ of the orbit.
 
-Ω and its gradient are built once, on Cartesian placeholders, and composed with the
-formulation's position. Only the terms the scene names are compiled; the reference plane
-enters the Cayley equations only when it moves.
+Ω is built once, on Cartesian placeholders, for the monitors; its gradient is built at the
+formulation's position, with |x|² as the formulation has it (:func:`.disturbing.force`). Only
+the terms the scene names are compiled; the reference plane enters the Cayley equations only
+when it moves.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from ..scene import Scene
 from . import elements as el
 from . import equations as eq
 from . import frames
-from .disturbing import Context, disturbing_function, gradient
+from .disturbing import Context, Gradient, force, term_functions
 from .encke import STATE as ENCKE
 from .encke import Encke
 from .revolutions import Revolutions
@@ -51,11 +52,10 @@ def build_model(scene: Scene) -> Model:
     plane = _plane_expressions(orbit.plane, pars)
     X = list(hy.make_vars(*CARTESIAN[:3]))
     ctx = Context(mu, pars, prec.dps + _GUARD_DIGITS)
-    Omega = disturbing_function(orbit.perturbations, X, ctx)
-    g = gradient(Omega, X) if Omega is not None else None
+    omegas = term_functions(orbit.perturbations, X, ctx)
     t0 = _start_time(scene)
 
-    b = _Builder(orbit, pars, plane, mu, Omega, g, X, prec)
+    b = _Builder(orbit, pars, plane, mu, omegas, X, prec, ctx)
     if orbit.formulation == "encke":
         # Its initial state is the deviation from the initial osculating ellipse, which the
         # formulation's own rectification computes.
@@ -174,10 +174,12 @@ def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
 class _Builder:
     """Collects the system, the position and velocity expressions and the outputs."""
 
-    def __init__(self, orbit, pars, plane, mu, Omega, g, X, precision) -> None:
+    def __init__(self, orbit, pars, plane, mu, omegas, X, precision, ctx) -> None:
         self.orbit, self.pars, self.plane, self.mu = orbit, pars, plane, mu
-        self.precision = precision
-        self.Omega, self.g, self.X = Omega, g, X
+        self.precision, self.ctx = precision, ctx
+        self.omegas, self.X = omegas, X
+        self.Omega = None if not omegas else omegas[0] if len(omegas) == 1 else hy.sum(omegas)
+        self.perturbed = bool(omegas)
         self.system: list[tuple[Any, Any]] = []
         self.initial: list[str] = []
         self.outputs: dict[str, Any] = {}
@@ -197,6 +199,13 @@ class _Builder:
             return hy.par[self.pars.index(name)]
         return self.pars.add(name, self.orbit.equatorial_limit)
 
+    def force(self, x: list[Any], r2: Any, radius: Any = None) -> Gradient | None:
+        """∇Ω at the position x, |x|² = r2, or at r x̂ for ``x`` = x̂ and ``radius`` = r
+        (:func:`.disturbing.force`); None without a disturbing function."""
+        if not self.perturbed:
+            return None
+        return force(self.orbit.perturbations, self.omegas, self.X, x, r2, self.ctx, radius)
+
     def at_position(self, expr: Any) -> Any:
         """An expression of the Cartesian placeholders, composed with the position."""
         return hy.subs(expr, {str(x): p for x, p in zip(self.X, self.position, strict=True)})
@@ -204,7 +213,7 @@ class _Builder:
     def cartesian(self, start: list[str]) -> None:
         x = self.X
         v = list(hy.make_vars(*CARTESIAN[3:]))
-        rhs = eq.cartesian_rates(x, v, self.mu, self.g)
+        rhs = eq.cartesian_rates(x, v, self.mu, self.force(x, frames.dot(x, x)))
         self.system = list(zip([*x, *v], rhs, strict=True))
         self.initial = start
         self.position, self.velocity = x, v
@@ -225,9 +234,14 @@ class _Builder:
         y, ydot, parts = en.curve(psi)
         self.position = [y[i] + d[i] for i in range(3)]
         self.velocity = [ydot[i] + dv[i] for i in range(3)]
-        acc = en.acceleration(y, d, parts)
-        if self.g is not None:
-            acc = [a + self.at_position(gi) for a, gi in zip(acc, self.g, strict=True)]
+        # ∇Ω at y + δ: its part along the position joins the Kepler part's coefficients.
+        g = self.force(self.position, en.distance(y, d, parts))
+        acc = en.acceleration(y, d, parts, None if g is None else _total(g.central))
+        if g is not None:
+            for i in range(3):
+                gi = g.component(i)
+                if gi is not None:
+                    acc[i] = acc[i] + gi
         rates = [*dv, *acc, parts["psi_rate"]]
         self.system = list(zip([*d, *dv, psi], rates, strict=True))
         x_, v_ = self.position, self.velocity
@@ -256,7 +270,7 @@ class _Builder:
         plane_turns = self.plane is not None and (
             self.plane.theta_rate is not None or self.plane.phi_rate is not None
         )
-        if exact_fraction(limit) > 0 and (self.g is not None or plane_turns):
+        if exact_fraction(limit) > 0 and (self.perturbed or plane_turns):
             eps = self.equatorial_limit()
             stop = TerminalSpec(hy.sin(Phi) - eps, -1, _EquatorialStop(limit), "equatorial_stops")
             self.terminal.append(stop)
@@ -296,10 +310,10 @@ class _Builder:
         return turns
 
     def _partials(self, r, axes: eq.OrbitAxes) -> tuple:
-        if self.g is None:
-            return None, None, None
         self.position = [r * c for c in axes.radial]
-        g = [self.at_position(gi) for gi in self.g]
+        g = self.force(axes.radial, None, radius=r)
+        if g is None:
+            return None, None, None
         return eq.cayley_partials(g, r, axes)
 
     def _kinematics(self, r, rdot, h, axes: eq.OrbitAxes) -> None:
@@ -499,6 +513,13 @@ def _events(scene: Scene, orbit: Orbit, b: _Builder, pars: ParTable) -> list[Eve
         if name not in scene.output.events:
             raise SceneError(f"events.{name}", "is defined but not listed in output.events")
     return events
+
+
+def _total(terms: list[Any]) -> Any:
+    """The sum of ``terms``, or None for none."""
+    if not terms:
+        return None
+    return terms[0] if len(terms) == 1 else hy.sum(terms)
 
 
 def _equatorial_function(b: _Builder) -> Any:

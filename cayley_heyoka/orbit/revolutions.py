@@ -13,12 +13,20 @@ The equations need ρ only modulo 2π (through ``u = ρ − Σ``, or cos ρ and 
 ``ρ_s + k (C − 2π)``: the *phase* parameter ``k (C − 2π)``, computed exactly and rounded once,
 removes the rounding of 2π, which would otherwise accumulate k times. The reported ρ is
 ``ρ_s + k C`` (the *offset* parameter), continuous across the events.
+
+The handler works in the run's arithmetic: ``k C`` and ``k (C − 2π)`` are integers times powers
+of two (C exactly, C − 2π to the run's bits + 128), each rounded once to the run's type from
+the exact integer product: a Python float, ``real128`` or ``real`` built from the integer
+(correctly rounded) and scaled by a power of two (exact). No decimal text, no mpmath arithmetic
+per revolution.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
+import heyoka as hy
 import mpmath
 
 from ..model import ParTable
@@ -49,6 +57,11 @@ class Revolutions:
         self._dps = precision.dps + 20
         with mpmath.workprec(precision.bits):
             self._C = +(2 * mpmath.pi)  # exactly the value C takes in the run's precision
+        with mpmath.workprec(precision.bits + 128):
+            # C − 2π, to enough bits that k (C − 2π) rounds as the exact product would.
+            self._D = _dyadic(self._C - 2 * mpmath.pi)
+        self._C_parts = _dyadic(self._C)
+        self._C_run = precision.number(self._text(self._C))
         with mpmath.workdps(self._dps):
             rho = mpmath.mpf(rho0)
             self.k = int(mpmath.floor(rho / self._C))
@@ -73,10 +86,10 @@ class Revolutions:
 
     def __call__(self, ta: Any, pars: Any) -> None:
         """Terminal-event handler: move one revolution from the state into the parameters."""
-        ta.state[self.state_index] -= self.precision.number(self._text(self._C))
+        ta.state[self.state_index] -= self._C_run
         self.k += 1
-        pars[self._offset_index] = self.precision.number(self._offset_text())
-        pars[self._phase_index] = self.precision.number(self._phase_text())
+        pars[self._offset_index] = self._times_k(self._C_parts)
+        pars[self._phase_index] = self._times_k(self._D)
 
     def checkpoint(self) -> int:
         """The revolutions completed (the engine's snapshot of a run carries it)."""
@@ -96,3 +109,20 @@ class Revolutions:
 
     def _text(self, value: Any) -> str:
         return mpmath.nstr(value, self._dps, strip_zeros=False)
+
+    def _times_k(self, parts: tuple[int, int]) -> Any:
+        """k m 2ᵉ for ``parts = (m, e)``, rounded once to the run's type."""
+        m, e = parts
+        p = self.precision
+        if p.kind == "double":
+            return math.ldexp(float(self.k * m), e)
+        if p.kind == "quad":
+            return hy.real128(self.k * m) * hy.real128(math.ldexp(1.0, e))
+        return hy.real(self.k * m, p.bits) * hy.real(math.ldexp(1.0, e), p.bits)
+
+
+def _dyadic(value: mpmath.mpf) -> tuple[int, int]:
+    """(m, e) with ``value = m 2ᵉ`` exactly."""
+    sign, man, exp, _ = value._mpf_
+    man = int(man)  # an mpz under mpmath's gmpy2 backend, which heyoka's types refuse
+    return (-man if sign else man), int(exp)

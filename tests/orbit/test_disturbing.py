@@ -146,3 +146,40 @@ def test_zonal_and_series_carry_no_double_constant_into_quad():
         )
         for value, expected in zip(got, (expected_zonal, expected_series), strict=True):
             assert abs(mpmath.mpf(str(value)) / expected - 1) < 1e-31
+
+
+@pytest.mark.parametrize("axis", [(0, 0, 1), (0, -3, 0), (0.1, -0.2, 1.0)])
+@pytest.mark.parametrize("on_sphere", [False, True])
+def test_closed_form_zonal_gradient_is_the_symbolic_one(axis, on_sphere):
+    """The closed form the equations compile (one power of r per term; :meth:`Zonal.gradient`),
+    in Cartesian form and on the unit sphere with ∂Ω/∂r apart (Cayley's), against heyoka's
+    derivative of Ω, degrees 2 to 12 with gaps."""
+    coefficients = ((2, "1.0826e-3"), (3, "-2.5e-6"), (4, "-1.6e-6"), (7, "3e-7"), (12, "2e-8"))
+    term = Zonal(coefficients, "0.8", tuple(str(c) for c in axis))
+    pars = ParTable()
+    mu = pars.add("mu", str(MU))
+    ctx = Context(mu, pars)
+    x = list(hy.make_vars("x", "y", "z"))
+    omega = term.omega(x, ctx)
+    if on_sphere:
+        # ∂Ω/∂r given apart; the vector part counts only across x̂:
+        # ∇Ω = x̂ ∂Ω/∂r + g − x̂ (x̂·g).
+        r = hy.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        unit = [c / r for c in x]
+        g = term.gradient(unit, None, ctx, radius=r)
+        vec = [g.component(i) if g.component(i) is not None else 0.0 for i in range(3)]
+        across = hy.sum(g.radial) - hy.sum([unit[i] * vec[i] for i in range(3)])
+        closed = [unit[i] * across + vec[i] for i in range(3)]
+    else:
+        g = term.gradient(x, x[0] * x[0] + x[1] * x[1] + x[2] * x[2], ctx)
+        central = hy.sum(g.central)
+        closed = [
+            -central * x[i] + (g.component(i) if g.component(i) is not None else 0.0)
+            for i in range(3)
+        ]
+    cf = hy.cfunc([*closed, *gradient(omega, x)], x)
+    values = np.array([float(v) for v in pars.values])
+    for p in X:
+        row = cf(p, pars=values)
+        scale = np.abs(row[3:]).max()
+        np.testing.assert_allclose(row[:3], row[3:], rtol=0, atol=1e-14 * scale)
