@@ -404,12 +404,13 @@ def formulation_steps_table() -> list[str]:
 
 
 ORBIT_NOTE = (
-    "Ω is written in Cartesian coordinates and differentiated by heyoka, then composed with "
-    "the frame tables (docs/orbits.md); the hand-written systems use the closed-form ∇Ω of "
-    "J2 instead, with literal constants that heyoka folds unless said otherwise: our "
-    "constants are runtime parameters, so that scenes differing only in numbers share "
-    "compiled code. The recipe is the same equations written by hand; the last row "
-    "is the price of generality against algebra specialised to J2 alone."
+    "The zonal terms (J2 and higher) enter our systems through their gradient in closed form, "
+    "one power of r per degree (third bodies and user potentials are differentiated by "
+    "heyoka), composed with the frame tables (docs/orbits.md); the hand-written systems use "
+    "the closed-form ∇Ω of J2, with literal constants that heyoka folds unless said "
+    "otherwise: our constants are runtime parameters, so that scenes differing only in "
+    "numbers share compiled code. The recipe is the same equations written by hand; the "
+    "last row is the price of generality against algebra specialised to J2 alone."
 )
 
 #: name -> (heading, what precedes the table, the table's function), in the file's order.
