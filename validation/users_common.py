@@ -27,7 +27,7 @@ class Row:
     ratios
         ours ÷ floor, one per repeat (each pair timed back to back).
     target
-        The ratio this path should not exceed.
+        The ratio this path should not exceed (None: reported, not judged).
     floor
         What the floor is, in words.
     note
@@ -36,7 +36,7 @@ class Row:
 
     what: str
     ratios: list[float]
-    target: float
+    target: float | None
     floor: str
     note: str = ""
     seconds: dict[str, float] = field(default_factory=dict)
@@ -50,8 +50,9 @@ class Row:
         return min(self.ratios), max(self.ratios)
 
     @property
-    def met(self) -> bool:
-        return self.median <= self.target
+    def met(self) -> bool | None:
+        """Whether the median meets the target (None: a row reported, not judged)."""
+        return None if self.target is None else self.median <= self.target
 
 
 def interleaved(
@@ -90,8 +91,10 @@ def table(rows: list[Row]) -> str:
     ]
     for r in rows:
         lo, hi = r.spread
+        target = "–" if r.target is None else f"≤ {r.target:g}"
+        met = {None: "–", True: "yes", False: "**no**"}[r.met]
         lines.append(
-            f"| {r.what} | {r.floor} | {r.median:.2f} ({lo:.2f}–{hi:.2f}) | ≤ {r.target:g} | "
-            f"{'yes' if r.met else '**no**'} | {r.note} |"
+            f"| {r.what} | {r.floor} | {r.median:.2f} ({lo:.2f}–{hi:.2f}) | {target} | "
+            f"{met} | {r.note} |"
         )
     return "\n".join(lines)
