@@ -122,15 +122,14 @@ def in_plane_rates(
 ) -> list[Expr]:
     """dr/dt, dṙ/dt, dρ/dt, dh/dt (§6.3; the radial sign is the corrected one, OCR item 3)."""
     r2 = r * r
-    rho_rate = h / r2
-    # h²/r³ = ρ̇² r: two products on ρ̇, which is computed anyway, instead of h², r³ and a
-    # division. (Not 1/r² once, as r**-2 times h and μ: 1 entry fewer in heyoka's
-    # decomposition, but over 10⁸ steps of Kepler its energy walked 3× farther with a windows
-    # slope of 0.68 — validation/bench_conservation.py — where the divisions walk by Brouwer.)
-    radial = rho_rate * rho_rate * r - mu / r2
+    # h²/r³ as h·h/(r²·r), not ρ̇²·r (ρ̇ = h/r² shared, two operations fewer) nor with 1/r²
+    # taken once: over 10⁸ steps of Kepler those made the energy walk 3× farther, with a
+    # windows slope of 0.63–0.68 (validation/bench_conservation.py), where this form walks
+    # by Brouwer's law.
+    radial = h * h / (r2 * r) - mu / r2
     if Omega_r is not None:
         radial = radial + Omega_r
-    return [rdot, radial, rho_rate, Omega_rho if Omega_rho is not None else _ZERO]
+    return [rdot, radial, h / r2, Omega_rho if Omega_rho is not None else _ZERO]
 
 
 def plane_rates(
