@@ -65,30 +65,22 @@ def use_compact_mode(model: Model, options: IntegratorOptions) -> bool:
     return options.precision.kind != "double" or model.compact or model.size() > COMPACT_THRESHOLD
 
 
-@dataclass
-class Compiled:
-    """A template integrator and the evaluator of outputs and monitors for one model structure.
+class Spares:
+    """Integrators of one compiled structure that finished runs handed back, for reuse.
 
-    ``spare`` holds integrators that finished runs handed back (:meth:`take`, :meth:`give`):
-    resetting one costs microseconds where copying the template cost 0.3–1 ms, most of a short
-    run.
+    Resetting one costs microseconds where copying the template cost 0.3–1 ms, most of a short
+    run. A reused integrator steps as a copy of the template does: heyoka chooses each step
+    from the current Taylor coefficients alone, and carries nothing else from a propagation to
+    the next but event cooldowns and the records our callbacks keep (both reset by
+    :meth:`take`). Needs ``integrator`` (the template) and ``spare`` (a list).
     """
 
     integrator: Any
-    evaluator: Any
-    compile_seconds: float
-    spare: list[Any] = field(default_factory=list)
-    #: Indices of the parameters the right-hand sides use (see :class:`_Watch`).
-    rhs_pars: list[int] = field(default_factory=list)
+    spare: list[Any]
 
     def take(self) -> Any:
         """An integrator of this structure that no one else is using, its event records
-        empty and its cooldowns reset; time, state and parameters are the caller's to set.
-
-        A reused integrator steps as a copy of the template does: heyoka chooses each step from
-        the current Taylor coefficients alone, and carries nothing else from a propagation to
-        the next but event cooldowns and the records our callbacks keep (both reset here).
-        """
+        empty and its cooldowns reset; time, state and parameters are the caller's to set."""
         try:
             ta = self.spare.pop()  # atomic: threads never get the same one
         except IndexError:
@@ -103,6 +95,19 @@ class Compiled:
         """Hand back an integrator from :meth:`take` that its run no longer uses."""
         if len(self.spare) < _SPARE:
             self.spare.append(ta)
+
+
+@dataclass
+class Compiled(Spares):
+    """A template integrator and the evaluator of outputs and monitors for one model structure
+    (with the integrators finished runs handed back: :class:`Spares`)."""
+
+    integrator: Any
+    evaluator: Any
+    compile_seconds: float
+    spare: list[Any] = field(default_factory=list)
+    #: Indices of the parameters the right-hand sides use (see :class:`_Watch`).
+    rhs_pars: list[int] = field(default_factory=list)
 
 
 #: Integrators kept for reuse per compiled structure (one per thread that runs it at once).

@@ -32,7 +32,6 @@ Double precision only (heyoka's batch integrators).
 
 from __future__ import annotations
 
-import copy
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -134,28 +133,13 @@ class _Finals:
 
 
 @dataclass
-class CompiledBatch:
+class CompiledBatch(engine.Spares):
     """A batch integrator template for one model structure, and spares to reuse."""
 
     integrator: Any
     width: int
     compile_seconds: float
     spare: list[Any] = field(default_factory=list)
-
-    def take(self) -> Any:
-        try:
-            ta = self.spare.pop()
-        except IndexError:
-            return copy.deepcopy(self.integrator)
-        if ta.with_events:
-            for ev in ta.nt_events:
-                ev.callback.clear()
-            ta.reset_cooldowns()
-        return ta
-
-    def give(self, ta: Any) -> None:
-        if len(self.spare) < 8:
-            self.spare.append(ta)
 
 
 _CACHE: dict[str, CompiledBatch] = {}

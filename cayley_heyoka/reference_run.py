@@ -338,22 +338,18 @@ def generate_reference(
     if not attempts:
         raise ValueError(f"max_bits ({max_bits}) leaves no higher precision to compare with")
     certified = attempts[-1]["scaled_error"] <= 10.0**-digits
-    metadata = {
-        "command": command or [],
-        "method": "integration",
-        "digits": digits,
-        "certified": certified,
-        "precision": written.precision.name,
-        "stretches": stretches,
-        "attempts": attempts,
-        "guard_digits": GUARD_DIGITS,
-        "max_bits": max_bits,
-        "wall_seconds": time.perf_counter() - started,
-        "scene_sha256": hashlib.sha256(
-            json.dumps(scene.to_dict(), sort_keys=True).encode()
-        ).hexdigest(),
-        "environment": _environment(),
-    }
+    metadata = _metadata(
+        scene,
+        command,
+        "integration",
+        digits,
+        certified,
+        written.precision,
+        attempts,
+        max_bits,
+        started,
+        stretches=stretches,
+    )
     _write(out, written, cert, digits, certified, metadata)
     if not keep_work:
         _remove_workdir(workdir)
@@ -407,21 +403,9 @@ def _closed_form_reference(
         prec = next_precision(prec)
         say(f"not enough: raising the precision to {label(prec)}")
     certified = cert.scaled <= 10.0**-digits
-    metadata = {
-        "command": command or [],
-        "method": "closed form",
-        "digits": digits,
-        "certified": certified,
-        "precision": prec.name,
-        "attempts": attempts,
-        "guard_digits": GUARD_DIGITS,
-        "max_bits": max_bits,
-        "wall_seconds": time.perf_counter() - started,
-        "scene_sha256": hashlib.sha256(
-            json.dumps(scene.to_dict(), sort_keys=True).encode()
-        ).hexdigest(),
-        "environment": _environment(),
-    }
+    metadata = _metadata(
+        scene, command, "closed form", digits, certified, prec, attempts, max_bits, started
+    )
     _write(out, result, cert, digits, certified, metadata)
     return ReferenceOutcome(out, certified, cert, prec, attempts)
 
@@ -813,6 +797,37 @@ def _labelled(progress: Any, label: str) -> Any:
     if progress is None:
         return None
     return lambda t: progress(label, t)
+
+
+def _metadata(
+    scene: Scene,
+    command: list[str] | None,
+    method: str,
+    digits: int,
+    certified: bool,
+    prec: Precision,
+    attempts: list,
+    max_bits: int,
+    started: float,
+    **extra: Any,
+) -> dict[str, Any]:
+    """``metadata["reference"]`` of a reference file: how to reproduce it."""
+    return {
+        "command": command or [],
+        "method": method,
+        "digits": digits,
+        "certified": certified,
+        "precision": prec.name,
+        **extra,
+        "attempts": attempts,
+        "guard_digits": GUARD_DIGITS,
+        "max_bits": max_bits,
+        "wall_seconds": time.perf_counter() - started,
+        "scene_sha256": hashlib.sha256(
+            json.dumps(scene.to_dict(), sort_keys=True).encode()
+        ).hexdigest(),
+        "environment": _environment(),
+    }
 
 
 def _environment() -> dict[str, str]:
