@@ -14,8 +14,8 @@ differently) and do not depend on the other members, their order, the lanes or t
 * a lane's trajectory depends on where its ``propagate_grid`` calls end (a call's last point
   ends a step there), so each lane keeps the scalar engine's schedule of calls
   (:class:`cayley_heyoka.engine.Propagation`). The batch call is rectangular, so a lane with
-  fewer points than the longest column gets unused points inserted between its first two (only
-  a call's last point ends a step);
+  fewer points than the longest column gets unused points inserted in its widest gap (only a
+  call's last point ends a step);
 * members usually run a batch at a time in one call over the whole grid (the engine's first
   call); a batch in which a lane stops short is run again lane by lane, below;
 * lane by lane, a lane that stops (a terminal event, a non-finite state, its step budget)
@@ -535,7 +535,9 @@ class _Lanes:
         t = ta.time[j]
         # Rows of the table holding this lane's output times (after any inserted points).
         extra = length - len(points)
-        rows = np.arange(lead, len(points)) + np.where(np.arange(lead, len(points)) > 0, extra, 0)
+        gap = int(np.argmax(np.diff(points))) if extra else 0  # where _padded inserted them
+        positions = np.arange(lead, len(points))
+        rows = positions + np.where(positions > gap, extra, 0)
         # heyoka writes the outputs a lane passes; a call stopped by a lane going non-finite
         # in its first step writes none (those rows stay NaN, the lanes' times unchanged).
         reached = int(np.count_nonzero(points[lead:] <= t))
@@ -623,18 +625,19 @@ def _finite_dtime(ta: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _padded(points: np.ndarray, length: int) -> np.ndarray:
-    """``points`` with ``length - len(points)`` unused times inserted between the first two
+    """``points`` with ``length - len(points)`` unused times inserted in their widest gap
     (strictly increasing, so heyoka accepts the grid; only the last point ends a step)."""
     extra = length - len(points)
     if extra == 0:
         return points
-    a, b = points[0], points[1]
-    fill = a + (b - a) * (np.arange(1, extra + 1) / (extra + 1))
+    k = int(np.argmax(np.diff(points)))
+    a, b = points[k], points[k + 1]
+    fill = np.unique(a + (b - a) * (np.arange(1, extra + 1) / (extra + 1)))
     fill = fill[(fill > a) & (fill < b)]
-    if len(fill) < extra:  # a and b too close in double to hold them all
-        raise _Crowded
-    return np.concatenate(([a], fill, points[1:]))
-
-
-class _Crowded(Exception):
-    pass
+    if len(fill) < extra:
+        raise ValueError(
+            f"output.times: no gap between output times holds {extra} distinct doubles "
+            f"(widest {float(a)!r} … {float(b)!r}); such a grid cannot be batched — run the "
+            "members with cayley_heyoka.run"
+        )
+    return np.concatenate((points[: k + 1], fill, points[k + 1 :]))

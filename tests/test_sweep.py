@@ -506,3 +506,16 @@ def test_scheduler_address_reaches_a_cluster_of_separate_processes(body_sweep, t
     np.testing.assert_array_equal(result.final_state, local.final_state)
     for name in local.drift:
         np.testing.assert_array_equal(result.drift[name], local.drift[name])
+
+
+def test_lane_columns_are_padded_in_their_widest_gap_or_refused():
+    """A lane's column is padded (rectangular batch calls) with times strictly inside its widest
+    gap, the last point kept last; a grid with no room is refused by name, not mangled."""
+    from cayley_heyoka.lanes import _padded
+
+    points = np.array([0.0, 1e-300, 1.0, 2.0])
+    padded = _padded(points, 8)
+    assert len(padded) == 8 and np.all(np.diff(padded) > 0) and padded[-1] == 2.0
+    assert set(points) <= set(padded)
+    with pytest.raises(ValueError, match="output.times"):
+        _padded(np.array([1.0, np.nextafter(1.0, 2.0)]), 5)
