@@ -215,7 +215,10 @@ def _compile(model: Model, options: IntegratorOptions) -> Compiled:
         for e in model.events
     ]
     t_events = [
-        hy.t_event(e.expression, direction=_direction(e.direction), **ev_kw) for e in model.terminal
+        hy.t_event(
+            e.expression, direction=_direction(e.direction), callback=TerminalCallback(i), **ev_kw
+        )
+        for i, e in enumerate(model.terminal)
     ]
     extra = {}
     if options.tolerance is not None:
@@ -382,9 +385,14 @@ class Propagation:
         self.counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
         self.status, self.message = 0, "every output time was reached"
         self._stopped_at: tuple | None = None
+        # The output times the current call may record, and the parameter vectors of the
+        # first of them, those passed before a terminal handler changed the parameters
+        # (:meth:`_on_terminal`).
+        self._rows: np.ndarray = self.grid[:0]
+        self._rows_pars: list[np.ndarray] = []
+        self._forward = len(self.grid) < 2 or bool(self.grid[-1] >= self.grid[0])
         #: Output times recorded so far.
         self.done = 0
-        self._span, self._since_event = len(self.grid), 0
         # The first steps estimate what the whole span needs (``_estimate``); the first call
         # is cut short to take them (``_PROBE_STEPS``).
         self._first_call, self._estimated = True, False
@@ -471,12 +479,11 @@ class Propagation:
     ) -> None:
         ta, prec, grid = self._ta, self.precision, self.grid
         # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
-        # ends a step there. So after a terminal event the grid is resumed from the current
-        # time; propagate_until to the next output would end a step at each output reached
-        # after an event — a rounding kick each, and a trajectory that depends on the output
-        # grid. A call costs O(its points): one after an event covers twice the outputs of the
-        # last stretch between events (the next event usually comes first), doubling while
-        # none interrupts it.
+        # ends a step there. One call covers every output time up to ``until``: terminal
+        # events are handled inside it (:class:`TerminalCallback`), so the trajectory depends
+        # neither on the output grid nor on where events fall. A call returns early only to
+        # stop (a handler's stop, the step budget, a non-finite state, a signal) or at the end
+        # of the first call's probe.
         while self.status == 0 and (self.done < end or ta.time < until):
             if self._signals.received:
                 self.status = INTERRUPTED
@@ -496,9 +503,9 @@ class Propagation:
                 self._out_of_steps(budget)
                 break
             i = self.done
-            points = grid[i : min(i + self._span, end)]
+            points = grid[i:end]
             outputs = len(points)
-            if i + self._span >= end and (outputs == 0 or points[-1] != until):
+            if outputs == 0 or points[-1] != until:
                 points = _ending_at(prec, points, until)  # a boundary, not an output
             resume = ta.time != points[0]
             if resume:
@@ -512,6 +519,7 @@ class Propagation:
                 callback = self._signals.callback
             first, self._first_call = self._first_call, False
             limit = min(left, _PROBE_STEPS) if first else left
+            self._rows, self._rows_pars = grid[i : i + outputs], []
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
             outcome, out = res[0], res[-1]
             taken = self.counters["steps"] + res[3]
@@ -526,26 +534,19 @@ class Propagation:
             out = out[int(resume) : int(resume) + outputs]
             self.counters["steps"] += res[3]
             states.append(out)
-            # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
-            pars_rows += [self._pars.copy() for _ in range(len(out))]
+            given = self._rows_pars[: len(out)]
+            pars_rows += given + [self._pars.copy() for _ in range(len(out) - len(given))]
             self.done += len(out)
-            self._since_event += len(out)
             code = int(outcome)
             if outcome == hy.taylor_outcome.time_limit:
-                self._span = min(2 * self._span, len(grid))
                 continue
             if outcome == hy.taylor_outcome.step_limit:
                 self._out_of_steps(budget)
                 break
-            if self._signals.received and (
-                outcome == hy.taylor_outcome.cb_stop
-                or (self._poisoning and outcome == hy.taylor_outcome.err_nf_state)
-            ):
+            if self._signals.received and self.status == 0:
                 continue  # reported at the top of the loop
-            self._span, self._since_event = 2 * self._since_event + RESUME_SPAN, 0
             if -len(self.terminal) <= code <= -1:
-                self._terminal(self.terminal[-code - 1])
-                continue
+                continue  # a handler stopped the run (its status and message are set)
             self.status = -1
             if outcome == hy.taylor_outcome.err_nf_state:
                 # heyoka's time may itself be NaN then: name the last output time kept instead.
@@ -562,22 +563,33 @@ class Propagation:
         ta = self.compiled.take()
         ta.time = self.grid[0]
         ta.state[:] = self._initial
+        for ev in ta.t_events if self.model.terminal else ():
+            ev.callback.target = self._on_terminal
+        self._ta_pars = ta.pars  # a view of the integrator's parameters (building one: ~1 µs)
         return ta
+
+    def _release_integrator(self) -> None:
+        ta, self._ta = self._ta, None
+        for ev in ta.t_events if self.model.terminal else ():
+            ev.callback.target = None  # no reference from a spare integrator to this run
+        self.compiled.give(ta)
 
     def release(self) -> None:
         """Hand the integrator back for reuse by later runs; this propagation is done with it
         (its :meth:`result` taken)."""
         if self._ta is not None:
-            self.compiled.give(self._ta)
-            self._ta = None
+            self._release_integrator()
 
     def _restart(self) -> Any:
         """Back to the first output time with the integrator reset (its event recorders
-        empty); nothing was recorded or handled yet."""
-        self.compiled.give(self._ta)
+        empty), the terminal handlers, their tallies and the parameters as at the start;
+        nothing was recorded yet."""
+        self._release_integrator()
+        self._pars = self.precision.array(self.model.pars.values)
+        self.terminal = own_terminal(self.model.terminal)
+        self.counters = dict.fromkeys(self.counters, 0)
         self._ta = ta = self._fresh_integrator()
         ta.pars[:] = self._pars[: self._held]
-        self.counters["steps"] = 0
         return ta
 
     def _estimate(self, steps: int, reached: Any, budget: int) -> None:
@@ -617,17 +629,34 @@ class Propagation:
             "results kept up to there (raise integrator.max_steps to go on)"
         )
 
-    def _terminal(self, spec: Any) -> None:
-        ta = self._ta
+    def _on_terminal(self, index: int, ta: Any) -> bool:
+        """Terminal event ``index`` reached, within heyoka's call: run its handler; whether
+        the integration goes on."""
+        if self._signals.received:
+            return False  # the parameters may hold a signal's poison: stop, reported after
+        # Output rows up to here were computed before this handler: they keep the parameters
+        # in force now (a row exactly at the event's time too).
+        rows, given, t = self._rows, self._rows_pars, ta.time
+        while len(given) < len(rows) and (
+            rows[len(given)] <= t if self._forward else rows[len(given)] >= t
+        ):
+            given.append(self._pars.copy())
+        spec = self.terminal[index]
         stop = spec.handle(ta, self._pars)
-        ta.pars[:] = self._pars[: self._held]
+        self._ta_pars[:] = self._pars[: self._held]
         self.counters[spec.counter] += 1
         if stop is not None:
             self.status, self.message = -1, stop
             if spec.records is not None:
-                self._stopped_at = (spec.records, ta.time, spec.direction)
-            return
+                self._stopped_at = (spec.records, t, spec.direction)
+            return False
+        # heyoka set this event's cooldown; the handler moved the state off the event's zero,
+        # so a genuine crossing soon after must not be muted.
         ta.reset_cooldowns()
+        if self._signals.received:
+            # A signal noted while the parameters were copied back: its poison was overwritten.
+            self._stop_stepping()
+        return True
 
     def snapshot(self) -> dict[str, Any]:
         """Everything :meth:`restore` needs to continue this run, as JSON-ready values.
@@ -640,8 +669,6 @@ class Propagation:
         prec, ta = self.precision, self._ta
         return {
             "done": self.done,
-            "span": self._span,
-            "since_event": self._since_event,
             "time": list(prec.to_text(prec.array(ta.dtime))),
             "state": list(prec.to_text(ta.state)),
             "pars": list(prec.to_text(self._pars)),
@@ -661,8 +688,7 @@ class Propagation:
         prec, ta = self.precision, self._ta
         # Its first steps were taken (and the span estimated) before the snapshot.
         self._first_call, self._estimated = False, True
-        self.done, self._span = int(snapshot["done"]), int(snapshot["span"])
-        self._since_event = int(snapshot["since_event"])
+        self.done = int(snapshot["done"])
         hi, lo = prec.from_text(snapshot["time"])
         ta.dtime = (hi, lo)
         ta.state[:] = prec.from_text(snapshot["state"])
@@ -720,13 +746,10 @@ class Propagation:
 # ---------------------------------------------------------------------- internals
 #: Steps at most of a run's first call (a run that needs more starts again after it, so that
 #: its bits do not depend on the cut); :meth:`Propagation._estimate` extrapolates from the
-#: first ``_PROBE_MIN_STEPS`` or more, over as many calls as terminal events make.
+#: first ``_PROBE_MIN_STEPS`` or more.
 _PROBE_STEPS = 1_000
 _PROBE_MIN_STEPS = 16
 _ESTIMATE_MARGIN = 10
-
-#: Output times added to a propagate_grid call after a terminal event (see ``run``).
-RESUME_SPAN = 8
 
 
 def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:
@@ -761,6 +784,28 @@ class _Recorder:
     def clear(self) -> None:
         self.times.clear()
         self.directions.clear()
+
+
+class TerminalCallback:
+    """The callback of a terminal event: hands the event to ``target(index, integrator)``,
+    which returns whether the integration goes on.
+
+    The engine points ``target`` at the run using the integrator
+    (:meth:`Propagation._on_terminal`). heyoka copies an integrator's callbacks with it; a copy
+    starts without a target (an integrator's copy serves another run).
+    """
+
+    def __init__(self, index: int) -> None:
+        self.index = index
+        self.target: Callable[[int, Any], bool] | None = None
+
+    def __deepcopy__(self, memo: dict) -> TerminalCallback:
+        return TerminalCallback(self.index)
+
+    def __call__(self, ta: Any, d_sgn: Any) -> bool:
+        if self.target is None:
+            raise RuntimeError("a terminal event reached with no run to handle it")
+        return self.target(self.index, ta)
 
 
 class _ProgressCallback:

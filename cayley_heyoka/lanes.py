@@ -13,19 +13,19 @@ differently) and do not depend on the other members, their order, the lanes or t
 * heyoka chooses each lane's steps from that lane's Taylor coefficients alone;
 * a lane's trajectory depends on where its ``propagate_grid`` calls end (a call's last point
   ends a step there), so each lane keeps the scalar engine's schedule of calls
-  (:class:`cayley_heyoka.engine.Propagation`). The batch call is rectangular, so a lane with
-  fewer points than the longest column gets unused points inserted in its widest gap (only a
-  call's last point ends a step);
-* members usually run a batch at a time in one call over the whole grid (the engine's first
-  call); a batch in which a lane stops short is run again lane by lane, below;
-* lane by lane, a lane that stops (a terminal event, a non-finite state, its step budget)
-  stops the batch call; the other lanes then stand at the end of a whole step and resume from
-  there with the rest of their call — the same steps as if it had gone on. A terminal event's
-  handler acts on a view of its lane (:class:`_LaneView`) and the member's own parameters, as
-  on a scalar integrator; members with terminal events always run this way, a lane given the
-  next member as soon as its own is done;
-* a lane with no member left follows a copy of a busy lane (re-copied before every call, its
-  results unused), so that it never steps anywhere a member does not.
+  (:class:`cayley_heyoka.engine.Propagation`): one call over the whole grid, terminal events
+  handled inside it. A terminal event's handler acts on a view of its lane
+  (:class:`_LaneView`) and the member's own parameters, as on a scalar integrator;
+* members usually run a batch at a time in that one call; a batch in which a lane stops short
+  (a handler's stop, a non-finite state, its step budget) is run again lane by lane, below;
+* lane by lane, a lane that stops stops the batch call; the other lanes then stand at the end
+  of a whole step and resume from there with the rest of their call — the same steps as if it
+  had gone on. The batch call is rectangular, so a lane with fewer points than the longest
+  column gets unused points inserted in its widest gap (only a call's last point ends a step);
+  a lane is given the next member as soon as its own is done;
+* a lane with no member follows a copy of a busy lane (re-copied before every call, its
+  results unused, its terminal events handled by copies of that lane's handlers), so that it
+  never steps anywhere a member does not.
 
 Double precision only (heyoka's batch integrators).
 """
@@ -92,15 +92,18 @@ class _Everything:
     def put(self, index: int, result: LaneResult) -> None:
         self.results[index] = result
 
-    def block(self, block, out, res, recorded, pars, end) -> None:
+    def block(self, block, out, res, recorded, pars, end, members) -> None:
         for j, index in enumerate(block):
             events = recorded(j)
+            counters, own = {"steps": int(res[j][3])}, pars[index]
+            if members is not None:  # terminal handlers: their tallies, parameters per row
+                counters, own = members[j].counters, np.concatenate(members[j].pars_rows)
             self.results[index] = LaneResult(
                 out[:, :, j].copy(),
-                pars[index],
+                own,
                 0,
                 "every output time was reached",
-                {"steps": int(res[j][3])},
+                counters,
                 engine.logs_of(self.model, events, _DOUBLE, None) if events else {},
                 float(end),
                 False,
@@ -123,7 +126,7 @@ class _Finals:
         else:
             self.finals.failed[index] = result
 
-    def block(self, block, out, res, recorded, pars, end) -> None:
+    def block(self, block, out, res, recorded, pars, end, members) -> None:
         n = len(block)
         self.finals.states[block[0] : block[0] + n] = out[-1, :, :n].T
         self.finals.steps[block[0] : block[0] + n] = [r[3] for r in res[:n]]
@@ -169,8 +172,10 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
             for e in model.events
         ]
         te = [
-            hy.t_event_batch(e.expression, direction=engine.event_direction(e))
-            for e in model.terminal
+            hy.t_event_batch(
+                e.expression, direction=engine.event_direction(e), callback=_LaneTerminal(i)
+            )
+            for i, e in enumerate(model.terminal)
         ]
         extra = {} if options.tolerance is None else {"tol": _DOUBLE.number(options.tolerance)}
         state = np.repeat(np.asarray(model.initial_state, dtype=float)[:, None], width, axis=1)
@@ -255,6 +260,8 @@ def propagate_members(
             lanes = _Lanes(ta, compiled.width, model, options, grid, next_block, results, cancel)
             lanes.run(initial, pars, terminal)
         finally:
+            for ev in ta.t_events if model.terminal else ():
+                ev.callback.target = None  # no reference from a spare integrator to the lanes
             compiled.give(ta)
 
     workers = max(1, min(threads, -(-members // compiled.width)))
@@ -303,6 +310,24 @@ class _LaneRecorder:
         return self.times.pop(lane, []), self.directions.pop(lane, [])
 
 
+class _LaneTerminal:
+    """Terminal event callback of a batch integrator: hands lane ``lane``'s event to
+    ``target(index, integrator, lane)``, which returns whether that lane goes on (see
+    :class:`cayley_heyoka.engine.TerminalCallback`)."""
+
+    def __init__(self, index: int) -> None:
+        self.index = index
+        self.target: Callable[[int, Any, int], bool] | None = None
+
+    def __deepcopy__(self, memo: dict) -> _LaneTerminal:
+        return _LaneTerminal(self.index)
+
+    def __call__(self, ta: Any, d_sgn: Any, lane: int) -> bool:
+        if self.target is None:
+            raise RuntimeError("a terminal event reached with no lanes to handle it")
+        return self.target(self.index, ta, lane)
+
+
 class _Copies:
     """Every member's own copy of shared terminal events (:func:`own_terminal`)."""
 
@@ -347,17 +372,21 @@ class _LaneView:
 
 @dataclass
 class _Member:
-    """A lane's member and where it stands in the engine's schedule of calls."""
+    """A lane's member and where it stands in the engine's schedule of calls.
+
+    ``rows`` are the output times the lane's current call may record and ``rows_pars`` the
+    parameter vectors of the first of them, those passed before a terminal handler changed
+    the parameters (as in :meth:`cayley_heyoka.engine.Propagation._on_terminal`).
+    """
 
     index: int
     pars: np.ndarray
     terminal: list[TerminalSpec] = field(default_factory=list)
     stopped_at: tuple | None = None
     done: int = 0
-    span: int = 0
-    since_event: int = 0
-    call_end: int | None = None
     steps: int = 0
+    rows: np.ndarray | None = None
+    rows_pars: list[np.ndarray] = field(default_factory=list)
     counters: dict[str, int] = field(default_factory=dict)
     status: int = 0
     message: str = "every output time was reached"
@@ -379,17 +408,17 @@ class _Lanes:
         self.held = ta.pars.shape[0]
         self.recorders = [ev.callback for ev in ta.nt_events] if model.events else []
         self.table: np.ndarray | None = None
+        # Each lane's member, and the copy an idle lane follows (:meth:`_twin`).
         self.lanes: list[_Member | None] = [None] * width
+        self.twins: list[_Member | None] = [None] * width
+        for ev in ta.t_events if model.terminal else ():
+            ev.callback.target = self._on_terminal
 
     def run(self, initial: np.ndarray, pars: np.ndarray, terminal: Any) -> None:
         """Members a batch at a time: one call over the whole grid, the usual case; a batch in
-        which a lane stops short (a non-finite state, the step budget) is run again lane by
-        lane (:meth:`_lane_by_lane`), with the same bits up to its stop. Members with terminal
-        events run lane by lane from the start (each event stops the call)."""
+        which a lane stops short (a handler's stop, a non-finite state, the step budget) is run
+        again lane by lane (:meth:`_lane_by_lane`), with the same bits up to its stop."""
         self.initial, self.pars, self.terminal = initial, pars, terminal
-        if self.model.terminal:
-            self._lane_by_lane(_Refilled(self.next_block))
-            return
         while not (self.cancel is not None and self.cancel.is_set()):
             block = self.next_block()
             if not block:
@@ -397,11 +426,37 @@ class _Lanes:
             if not self._at_once(block):
                 self._lane_by_lane(iter(block))
 
+    def _member(self, index: int) -> _Member:
+        """Member ``index`` at its start: its parameters, its own terminal handlers."""
+        specs = own_terminal(self.terminal[index])
+        m = _Member(index, np.array(self.pars[index], dtype=float), specs)
+        m.counters = {"steps": 0, **{spec.counter: 0 for spec in specs}}
+        m.event_times = [[] for _ in self.model.events]
+        m.event_directions = [[] for _ in self.model.events]
+        return m
+
+    @staticmethod
+    def _twin(m: _Member) -> _Member:
+        """A stand-in that an idle lane following ``m``'s lane hands its terminal events to:
+        copies of ``m``'s parameters and handlers, its results unused."""
+        twin = _Member(-1, m.pars.copy(), own_terminal(m.terminal))
+        twin.counters = dict(m.counters)
+        return twin
+
     def _at_once(self, block: list[int]) -> bool:
         """Integrate ``block`` in one call over the grid; False if a lane did not reach its
         end (nothing is recorded then)."""
         ta, width, grid = self.ta, self.width, self.grid
         lanes = block + [block[-1]] * (width - len(block))  # spare lanes copy the last member
+        members: list[_Member] | None = None
+        if self.model.terminal:
+            members = [self._member(i) for i in block]
+            for m in members:
+                m.rows = grid
+            self.lanes = [*members, *[None] * (width - len(block))]
+            self.twins = [None] * len(block) + [
+                self._twin(members[-1]) for _ in range(width - len(block))
+            ]
         ta.set_dtime(np.full(width, grid[0]), np.zeros(width))
         ta.state[:] = self.initial[lanes].T
         ta.pars[:] = self.pars[lanes, : self.held].T
@@ -424,13 +479,18 @@ class _Lanes:
         else:
             out = ta.state.copy()[None, :, :]
             res = [(hy.taylor_outcome.time_limit, 0, 0, 0)] * width
+        self.lanes, self.twins = [None] * width, [None] * width
         end, times = grid[-1], ta.time
         done = hy.taylor_outcome.time_limit
         if any(res[j][0] != done or times[j] != end for j in range(len(block))):
             return False
+        if members is not None:
+            for j, m in enumerate(members):
+                m.counters["steps"] = int(res[j][3])
+                self._keep(m, out[:, :, j].copy())
         recorders = self.recorders
         self.results.block(
-            block, out, res, lambda j: [rec.take(j) for rec in recorders], self.pars, end
+            block, out, res, lambda j: [rec.take(j) for rec in recorders], self.pars, end, members
         )
         return True
 
@@ -446,6 +506,7 @@ class _Lanes:
             if self.cancel is not None and self.cancel.is_set():
                 return
             self._step()
+        self.twins = [None] * self.width
 
     def _assign(self, j: int) -> None:
         """Give lane ``j`` the next member, or nothing (then it follows a busy lane)."""
@@ -453,19 +514,14 @@ class _Lanes:
         if index is None:
             self.lanes[j] = None
             return
-        pars = np.array(self.pars[index], dtype=float)
-        specs = list(self.terminal[index])
-        member = _Member(index, pars, specs, span=len(self.grid))
-        member.counters = {"steps": 0, **{spec.counter: 0 for spec in specs}}
-        member.event_times = [[] for _ in self.model.events]
-        member.event_directions = [[] for _ in self.model.events]
-        self.lanes[j] = member
+        self.lanes[j] = m = self._member(index)
+        self.twins[j] = None
         ta = self.ta
         hi, lo = _finite_dtime(ta)
         hi[j], lo[j] = self.grid[0], 0.0
         ta.set_dtime(hi, lo)
         ta.state[:, j] = self.initial[index]
-        ta.pars[:, j] = pars[: self.held]
+        ta.pars[:, j] = m.pars[: self.held]
         for rec in self.recorders:
             rec.clear(j)
         if ta.with_events:
@@ -473,24 +529,21 @@ class _Lanes:
         self._record_trivial(j)
 
     def _record_trivial(self, j: int) -> None:
-        """Calls of one point at the lane's current time take no step: recorded here."""
+        """A call of one point at the lane's current time takes no step: recorded here."""
+        last = len(self.grid) - 1
         while (m := self.lanes[j]) is not None:
-            if m.status != 0 or m.done == len(self.grid):
+            if m.status != 0 or m.done > last:
                 self._finish(j)
                 continue
-            if m.call_end is None:
-                m.call_end = min(m.done + m.span, len(self.grid))
-            if m.call_end - m.done == 1 and self.ta.time[j] == self.grid[m.done]:
+            if m.done == last and self.ta.time[j] == self.grid[last]:
                 self._keep(m, self.ta.state[:, j].copy()[None, :])
-                m.call_end = None
-                m.span = min(2 * m.span, len(self.grid))
                 continue
             return
 
     def _column(self, j: int, m: _Member) -> tuple[np.ndarray, int]:
         """Lane ``j``'s points for this call, and how many lead the outputs (the current
         time, if it is not the first output)."""
-        points = self.grid[m.done : m.call_end]
+        points = self.grid[m.done :]
         t = self.ta.time[j]
         if t != points[0]:
             return np.concatenate(([t], points)), 1
@@ -500,8 +553,11 @@ class _Lanes:
         ta, width = self.ta, self.width
         busy = [j for j in range(width) if self.lanes[j] is not None]
         columns = {j: self._column(j, self.lanes[j]) for j in busy}
+        for j in busy:
+            points, lead = columns[j]
+            self.lanes[j].rows, self.lanes[j].rows_pars = points[lead:], []
         length = max(len(c) for c, _ in columns.values())
-        # Idle lanes follow a busy one (a copy of its time, state and parameters).
+        # Idle lanes follow a busy one (a copy of its time, state, parameters and handlers).
         source = busy[0]
         hi, lo = _finite_dtime(ta)
         for j in range(width):
@@ -511,6 +567,8 @@ class _Lanes:
                 ta.pars[:, j] = ta.pars[:, source]
                 if ta.with_events:
                     ta.reset_cooldowns(j)
+                if self.model.terminal:
+                    self.twins[j] = self._twin(self.lanes[source])
                 columns[j] = columns[source]
         ta.set_dtime(hi, lo)
         table = np.empty((length, width))
@@ -549,29 +607,25 @@ class _Lanes:
         m.time = t
         if reached:
             self._keep(m, out[rows[:reached]].copy())
-        m.since_event += reached
         for rec, times, directions in zip(
             self.recorders, m.event_times, m.event_directions, strict=True
         ):
             got_t, got_d = rec.take(j)
             times += got_t
             directions += got_d
-        if t == points[-1] and m.done == m.call_end:
-            m.span = min(2 * m.span, len(self.grid))
-            m.call_end = None
+        code = int(outcome)
+        if m.status != 0 or (t == points[-1] and m.done == len(self.grid)):
+            pass  # stopped by its handler (status set), or every output reached
         elif m.steps >= self.budget:
             self._out_of_steps(m, t)
-        elif -len(m.terminal) <= (code := int(outcome)) <= -1:
-            m.span, m.since_event, m.call_end = 2 * m.since_event + engine.RESUME_SPAN, 0, None
-            self._terminal(j, m, m.terminal[-code - 1])
         elif outcome == hy.taylor_outcome.err_nf_state:
             m.status, m.nonfinite = -1, True
             when = t if np.isfinite(t) else self.grid[max(m.done - 1, 0)]
             m.message = f"the state became non-finite after t = {when}; results kept up to there"
-        elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit) or (
-            code < -len(m.terminal)
-        ):
+        elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit) or code >= 0:
             pass  # another lane stopped the call, this one at the end of a whole step
+        elif code < 0 and -code - 1 < len(self.model.terminal):
+            pass  # its twin's handler stopped (the lane stands where its own would have)
         elif outcome != hy.taylor_outcome.time_limit:
             m.status = -1
             m.message = f"stopped at t = {t} with outcome {outcome}"
@@ -579,21 +633,36 @@ class _Lanes:
 
     def _keep(self, m: _Member, rows: np.ndarray) -> None:
         m.states.append(rows)
-        if m.terminal:  # handlers change parameters (a chart's base): one row per output
-            m.pars_rows.append(np.repeat(m.pars[None, :], len(rows), axis=0))
+        if m.terminal:  # handlers change parameters (a chart's base): one vector per row
+            given = m.rows_pars[: len(rows)]
+            rest = [m.pars] * (len(rows) - len(given))
+            m.pars_rows.append(np.array(given + rest).reshape(len(rows), len(m.pars)))
+            m.rows_pars = []
         m.done += len(rows)
 
-    def _terminal(self, j: int, m: _Member, spec: TerminalSpec) -> None:
-        ta = self.ta
-        stop = spec.handle(_LaneView(ta, j), m.pars)
-        ta.pars[:, j] = m.pars[: self.held]
+    def _on_terminal(self, index: int, ta: Any, lane: int) -> bool:
+        """Terminal event ``index`` of lane ``lane``, within heyoka's call: its member's
+        handler on a view of the lane (:class:`_LaneView`); whether the lane goes on."""
+        m = self.lanes[lane] or self.twins[lane]
+        if m is None:
+            raise RuntimeError(f"lane {lane} reached a terminal event with no member")
+        t = ta.time[lane]
+        rows, given = m.rows, m.rows_pars
+        if rows is not None:
+            # Output rows up to here were computed before this handler (see the engine's).
+            while len(given) < len(rows) and rows[len(given)] <= t:
+                given.append(m.pars.copy())
+        spec = m.terminal[index]
+        stop = spec.handle(_LaneView(ta, lane), m.pars)
+        ta.pars[:, lane] = m.pars[: self.held]
         m.counters[spec.counter] += 1
         if stop is not None:
             m.status, m.message = -1, stop
             if spec.records is not None:
-                m.stopped_at = (spec.records, ta.time[j], spec.direction)
-            return
-        ta.reset_cooldowns(j)
+                m.stopped_at = (spec.records, t, spec.direction)
+            return False
+        ta.reset_cooldowns(lane)
+        return True
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
         m.status = -1
@@ -604,17 +673,19 @@ class _Lanes:
 
     def _finish(self, j: int) -> None:
         m = self.lanes[j]
+        self.results.put(m.index, self._result(m))
+        self._assign(j)
+
+    def _result(self, m: _Member) -> LaneResult:
         states = np.concatenate(m.states) if m.states else np.empty((0, self.ta.dim))
         pars = m.pars
         if m.terminal:
             pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
         recorded = list(zip(m.event_times, m.event_directions, strict=True))
         events = engine.logs_of(self.model, recorded, _DOUBLE, m.stopped_at)
-        result = LaneResult(
+        return LaneResult(
             states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
         )
-        self.results.put(m.index, result)
-        self._assign(j)
 
 
 def _finite_dtime(ta: Any) -> tuple[np.ndarray, np.ndarray]:

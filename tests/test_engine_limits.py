@@ -345,3 +345,16 @@ def test_a_reused_integrator_gives_the_bits_of_a_fresh_copy(build):
     for name, log in fresh.events.items():
         prec = fresh.precision
         assert np.array_equal(prec.to_text(log.time), prec.to_text(again.events[name].time))
+
+
+def test_an_integrator_handed_back_keeps_no_reference_to_its_run():
+    """Terminal events are handled by callbacks pointed at the run using the integrator; one
+    handed back for reuse points nowhere (it would otherwise keep the run and its rows)."""
+    scene = ch.Scene.from_dict(free_body(attitude={"formulation": "rodrigues"}))
+    result = ch.run(scene)
+    assert result.counters["rebasings"] > 0
+    compiled, cached = engine.compile_model(engine.model_of(scene), scene.integrator)
+    assert cached and compiled.spare
+    for ta in compiled.spare:
+        assert all(ev.callback.target is None for ev in ta.t_events)
+    assert all(ev.callback.target is None for ev in compiled.integrator.t_events)

@@ -60,6 +60,7 @@ from cayley_heyoka.engine import compile_model  # noqa: E402
 from cayley_heyoka.families import FAMILIES  # noqa: E402
 from cayley_heyoka.hamilton import planets as hp  # noqa: E402
 from cayley_heyoka.hamilton.planets_model import initial_state as planets_initial_state  # noqa: E402
+from cayley_heyoka.model import own_terminal  # noqa: E402
 from cayley_heyoka.orbit import elements as oe  # noqa: E402
 from cayley_heyoka.reference import FreeRigidBody  # noqa: E402
 
@@ -149,11 +150,11 @@ def _with(data: dict, precision: str, tolerance: str, times: list) -> ch.Scene:
 class Stepper:
     """``run``'s compiled integrator, stepped over the scene's span without ``run``'s fixed cost.
 
-    The same template integrator ``run`` copies (``engine.compile_model``), the same calls
-    (``propagate_grid`` over the output times, ``propagate_until`` after a terminal event) and
-    the same event handling (the family's handlers: chart re-basings, revolutions of ρ); left
-    out is what ``run`` does around them — building the model, the cache lookup, the copy of
-    the integrator, the output evaluation — which is measured apart. The step count is checked
+    The same template integrator ``run`` copies (``engine.compile_model``), the same call
+    (one ``propagate_grid`` over the output times, terminal events handled inside it) and the
+    same event handling (the family's handlers: chart re-basings, revolutions of ρ); left out
+    is what ``run`` does around them — building the model, the cache lookup, the copy of the
+    integrator, the output evaluation — which is measured apart. The step count is checked
     against ``run``'s, or this would time something else.
     """
 
@@ -175,24 +176,24 @@ class Stepper:
         ta.pars[:] = pars[:held]
         if model.terminal:
             ta.reset_cooldowns()  # the previous pass's last event must not mute the first
-        taken = 0
+            handlers = own_terminal(model.terminal)
+
+            def handle(index: int, ta: Any) -> bool:
+                if handlers[index].handle(ta, pars) is not None:
+                    raise RuntimeError("a terminal event stopped the timed run")
+                ta.pars[:] = pars[:held]
+                ta.reset_cooldowns()
+                return True
+
+            for ev in ta.t_events:
+                ev.callback.target = handle
         s = time.perf_counter()
         res = ta.propagate_grid(grid)
-        while True:
-            taken += res[3]
-            if res[0] == hy.taylor_outcome.time_limit:
-                break
-            code = int(res[0])
-            if not -len(model.terminal) <= code <= -1:
-                raise RuntimeError(f"stepping ended with outcome {res[0]}")
-            if model.terminal[-code - 1].handle(ta, pars) is not None:
-                raise RuntimeError("a terminal event stopped the timed run")
-            ta.pars[:] = pars[:held]
-            ta.reset_cooldowns()
-            res = ta.propagate_until(grid[-1])
         elapsed = time.perf_counter() - s
-        if taken != self.steps:
-            raise RuntimeError(f"stepped {taken} steps where run() took {self.steps}")
+        if res[0] != hy.taylor_outcome.time_limit:
+            raise RuntimeError(f"stepping ended with outcome {res[0]}")
+        if res[3] != self.steps:
+            raise RuntimeError(f"stepped {res[3]} steps where run() took {self.steps}")
         return elapsed
 
 

@@ -69,6 +69,8 @@ class Revolutions:
         self.two_pi = pars.add("orbit.two_pi", self._text(self._C))
         self.offset = pars.add("orbit.rho_offset", self._offset_text())
         self.phase = pars.add("orbit.rho_phase", self._phase_text())
+        if precision.kind == "double":
+            self._scaled = _double_scaled
         self._offset_index = pars.index("orbit.rho_offset")
         self._phase_index = pars.index("orbit.rho_phase")
 
@@ -87,9 +89,11 @@ class Revolutions:
     def __call__(self, ta: Any, pars: Any) -> None:
         """Terminal-event handler: move one revolution from the state into the parameters."""
         ta.state[self.state_index] -= self._C_run
-        self.k += 1
-        pars[self._offset_index] = self._times_k(self._C_parts)
-        pars[self._phase_index] = self._times_k(self._D)
+        self.k = k = self.k + 1
+        (mc, ec), (md, ed) = self._C_parts, self._D
+        scaled = self._scaled
+        pars[self._offset_index] = scaled(k * mc, ec)
+        pars[self._phase_index] = scaled(k * md, ed)
 
     def checkpoint(self) -> int:
         """The revolutions completed (the engine's snapshot of a run carries it)."""
@@ -110,15 +114,17 @@ class Revolutions:
     def _text(self, value: Any) -> str:
         return mpmath.nstr(value, self._dps, strip_zeros=False)
 
-    def _times_k(self, parts: tuple[int, int]) -> Any:
-        """k m 2ᵉ for ``parts = (m, e)``, rounded once to the run's type."""
-        m, e = parts
+    def _scaled(self, n: int, e: int) -> Any:
+        """n 2ᵉ, rounded once to the run's type (replaced per instance, below, for doubles)."""
         p = self.precision
-        if p.kind == "double":
-            return math.ldexp(float(self.k * m), e)
         if p.kind == "quad":
-            return hy.real128(self.k * m) * hy.real128(math.ldexp(1.0, e))
-        return hy.real(self.k * m, p.bits) * hy.real(math.ldexp(1.0, e), p.bits)
+            return hy.real128(n) * hy.real128(math.ldexp(1.0, e))
+        return hy.real(n, p.bits) * hy.real(math.ldexp(1.0, e), p.bits)
+
+
+def _double_scaled(n: int, e: int) -> float:
+    """n 2ᵉ as a double: float(n) rounds the integer once, the scaling by 2ᵉ is exact."""
+    return math.ldexp(float(n), e)
 
 
 def _dyadic(value: mpmath.mpf) -> tuple[int, int]:
