@@ -385,12 +385,12 @@ class Propagation:
         self.counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
         self.status, self.message = 0, "every output time was reached"
         self._stopped_at: tuple | None = None
-        # The output times the current call may record, and the parameter vectors of the
-        # first of them, those passed before a terminal handler changed the parameters
-        # (:meth:`_on_terminal`).
+        # The output times the current call may record (increasing), the parameter vectors of
+        # the first of them — those passed before a terminal handler changed the parameters —
+        # and the time of the next one (None: none left), for :meth:`_on_terminal`.
         self._rows: np.ndarray = self.grid[:0]
         self._rows_pars: list[np.ndarray] = []
-        self._forward = len(self.grid) < 2 or bool(self.grid[-1] >= self.grid[0])
+        self._next_row: Any = None
         #: Output times recorded so far.
         self.done = 0
         # The first steps estimate what the whole span needs (``_estimate``); the first call
@@ -520,6 +520,7 @@ class Propagation:
             first, self._first_call = self._first_call, False
             limit = min(left, _PROBE_STEPS) if first else left
             self._rows, self._rows_pars = grid[i : i + outputs], []
+            self._next_row = grid[i] if outputs else None
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
             outcome, out = res[0], res[-1]
             taken = self.counters["steps"] + res[3]
@@ -634,13 +635,9 @@ class Propagation:
         the integration goes on."""
         if self._signals.received:
             return False  # the parameters may hold a signal's poison: stop, reported after
-        # Output rows up to here were computed before this handler: they keep the parameters
-        # in force now (a row exactly at the event's time too).
-        rows, given, t = self._rows, self._rows_pars, ta.time
-        while len(given) < len(rows) and (
-            rows[len(given)] <= t if self._forward else rows[len(given)] >= t
-        ):
-            given.append(self._pars.copy())
+        t = ta.time
+        if self._next_row is not None and self._next_row <= t:
+            self._pass_rows(t)
         spec = self.terminal[index]
         stop = spec.handle(ta, self._pars)
         self._ta_pars[:] = self._pars[: self._held]
@@ -650,13 +647,18 @@ class Propagation:
             if spec.records is not None:
                 self._stopped_at = (spec.records, t, spec.direction)
             return False
-        # heyoka set this event's cooldown; the handler moved the state off the event's zero,
-        # so a genuine crossing soon after must not be muted.
-        ta.reset_cooldowns()
         if self._signals.received:
             # A signal noted while the parameters were copied back: its poison was overwritten.
             self._stop_stepping()
         return True
+
+    def _pass_rows(self, t: Any) -> None:
+        """The output rows up to ``t`` (a terminal event's time) were computed before its
+        handler: they keep the parameters in force now (a row exactly at ``t`` too)."""
+        rows, given = self._rows, self._rows_pars
+        while len(given) < len(rows) and rows[len(given)] <= t:
+            given.append(self._pars.copy())
+        self._next_row = rows[len(given)] if len(given) < len(rows) else None
 
     def snapshot(self) -> dict[str, Any]:
         """Everything :meth:`restore` needs to continue this run, as JSON-ready values.

@@ -35,10 +35,11 @@ Modes (measured in validation/BENCHMARKS.md, section "Set-up cost and ensembles"
     the scalar integrator in the calling thread: the reference the others must equal.
 
 Only the final state is returned: no output grid, monitors or events. Scenes with terminal
-events (the Rodrigues chart's re-basing, whose handler changes the state; the orbit's
-revolution count and equatorial stop) are refused, since a batch integrator cannot run their
-handlers lane by lane: use ``attitude.formulation = "quaternion"`` or
-``orbit.formulation = "cartesian"``. Members share the scene's numbers (runtime parameters);
+events are refused: their handlers keep part of the motion in runtime parameters (the
+Rodrigues chart's base, ρ's whole revolutions, Encke's reference ellipse), so the final
+integrated state alone does not give it. Use ``attitude.formulation = "quaternion"`` or
+``orbit.formulation = "cartesian"``, or :func:`cayley_heyoka.run_sweep`, which runs such
+members in the same batch lanes (handlers included) and records their outputs. Members share the scene's numbers (runtime parameters);
 scenes differing only in numbers share the compiled code, so one ensemble per set of numbers
 costs no recompilation.
 """
@@ -215,8 +216,9 @@ def propagate_ensemble(
             for t in model.terminal
         )
         raise ValueError(
-            "this scene has terminal events, whose handlers act on one integrator at a time "
-            f"(they cannot run lane by lane in a batch, so no mode supports them): {why}"
+            "this scene has terminal events, whose handlers keep part of the motion in "
+            "parameters, so a final state alone does not give it (no mode returns them; "
+            f"run_sweep runs such members in batch lanes and records their outputs): {why}"
         )
     names = tuple(model.state_names)
     states = _initial_states(initial_states, names, prec)

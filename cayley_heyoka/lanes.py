@@ -661,7 +661,6 @@ class _Lanes:
             if spec.records is not None:
                 m.stopped_at = (spec.records, t, spec.direction)
             return False
-        ta.reset_cooldowns(lane)
         return True
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
