@@ -39,9 +39,10 @@ events are refused: their handlers keep part of the motion in runtime parameters
 Rodrigues chart's base, ρ's whole revolutions, Encke's reference ellipse), so the final
 integrated state alone does not give it. Use ``attitude.formulation = "quaternion"`` or
 ``orbit.formulation = "cartesian"``, or :func:`cayley_heyoka.run_sweep`, which runs such
-members in the same batch lanes (handlers included) and records their outputs. Members share the scene's numbers (runtime parameters);
-scenes differing only in numbers share the compiled code, so one ensemble per set of numbers
-costs no recompilation.
+members in the same batch lanes (handlers included) and records their outputs.
+
+Members share the scene's numbers (runtime parameters); scenes differing only in numbers share
+the compiled code, so one ensemble per set of numbers costs no recompilation.
 """
 
 from __future__ import annotations

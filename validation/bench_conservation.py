@@ -451,9 +451,9 @@ def cost_table(data: dict) -> list[str]:
     lines = [
         "Cost of the long runs (a side effect: wall time of `run()` without compilation, "
         "recording included; the machine is shared, so ±30 %). Events are re-basings of the "
-        "Rodrigues chart or revolutions of ρ, each a return to Python; the revolution's handler "
-        "builds its two parameters through mpmath text (20–35 µs a revolution, measured "
-        "apart: about half the Cayley and quaternion orbits' wall time here).",
+        "Rodrigues chart or revolutions of ρ, each handled by a Python callback inside "
+        "heyoka's call (the revolution's handler works in the run's arithmetic: "
+        "`python validation/users_orbit.py` measures its share).",
         "",
         "| system | formulation | steps | events | wall | ns/step |",
         "|---|---|---|---|---|---|",

@@ -80,7 +80,8 @@ class RodriguesAtlas:
         # per re-basing). ``tolist`` keeps every value exactly (Python floats in double, the
         # precision's own numbers otherwise), and the operations and their order are those of
         # the array code, so the bits are the same.
-        rho = ta.state[self.state_slice].tolist()
+        state = ta.state
+        rho = state[self.state_slice].tolist()
         i = self._base_index
         base = pars[i : i + 4].tolist()
         # The chart as (1, λ, μ, ν), unnormalised: the fold happens at κ = κ_max, so the unit
@@ -92,8 +93,11 @@ class RodriguesAtlas:
         w, x, y, z = att.quaternion_multiply(base, [one, *rho])
         norm = _sqrt(w * w + x * x + y * y + z * z)
         new = [w / norm, x / norm, y / norm, z / norm]
-        pars[i : i + 4] = new
-        ta.state[self.state_slice] = [0 * c for c in new[1:]]
+        # Element by element: a slice assigned from a list first builds an array (~1 µs).
+        pars[i], pars[i + 1], pars[i + 2], pars[i + 3] = new
+        zero = 0 * new[1]  # in the state's type
+        j = self.state_slice.start
+        state[j], state[j + 1], state[j + 2] = zero, zero, zero
         if self.momentum_space is not None:
             j = self._momentum_index
             pars[j : j + 3] = self._momentum_in_base(new)
