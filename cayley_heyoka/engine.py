@@ -519,6 +519,9 @@ class Propagation:
                 callback = self._signals.callback
             first, self._first_call = self._first_call, False
             limit = min(left, _PROBE_STEPS) if first else left
+            if first and isinstance(callback, _ProgressCallback):
+                # Progress is reported once a step is kept: a cut first call is taken again.
+                callback = _HeldProgress(callback)
             self._rows, self._rows_pars = grid[i : i + outputs], []
             self._next_row = grid[i] if outputs else None
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
@@ -532,6 +535,8 @@ class Propagation:
                 # Resuming this call would change bits (see below): start again, uncut.
                 ta = self._restart()
                 continue
+            if isinstance(callback, _HeldProgress):
+                callback.release()
             out = out[int(resume) : int(resume) + outputs]
             self.counters["steps"] += res[3]
             states.append(out)
@@ -818,6 +823,26 @@ class _ProgressCallback:
     def __call__(self, ta: Any) -> bool:
         self.progress(float(ta.time))
         return not self.signals.received
+
+
+class _HeldProgress:
+    """The progress callback of a run's first call, which may be cut and taken again
+    (:meth:`Propagation._estimate`): the times are held, and reported by :meth:`release` once
+    the call's steps are kept, so that progress never goes back (and a caller that maps steps
+    to times, as the validation reports do, sees each kept step once)."""
+
+    def __init__(self, callback: _ProgressCallback) -> None:
+        self.callback = callback
+        self.times: list[float] = []
+
+    def __call__(self, ta: Any) -> bool:
+        self.times.append(float(ta.time))
+        return not self.callback.signals.received
+
+    def release(self) -> None:
+        for t in self.times:
+            self.callback.progress(t)
+        self.times.clear()
 
 
 class _DeferredSignals:

@@ -100,16 +100,18 @@ def test_step_budget_stops_cleanly_and_keeps_the_same_bits():
 
 
 def test_interrupt_keeps_what_was_computed():
-    """SIGINT during propagation (sent from the progress callback, so at a known time): an
-    Interrupted carrying the rows computed, the same bits as the uninterrupted run."""
-    whole = ch.run(_scene())
+    """SIGINT during propagation (sent from the progress callback, so at a known time, after
+    the first call's steps, whose progress is held until they are kept): an Interrupted
+    carrying the rows computed, the same bits as the uninterrupted run."""
+    long = {"output": {"times": {"start": "0", "stop": "4000", "count": 81}}}
+    whole = ch.run(_scene(**long))
 
     def progress(t: float) -> None:
-        if t > 15:
+        if t > 1500:
             os.kill(os.getpid(), signal.SIGINT)
 
     with pytest.raises(Interrupted) as info:
-        ch.run(_scene(), progress=progress)
+        ch.run(_scene(**long), progress=progress)
     part = info.value.result
     assert part.status == engine.INTERRUPTED and "interrupted (SIGINT)" in part.message
     assert 30 <= len(part.t) < len(whole.t)
@@ -358,3 +360,17 @@ def test_an_integrator_handed_back_keeps_no_reference_to_its_run():
     for ta in compiled.spare:
         assert all(ev.callback.target is None for ev in ta.t_events)
     assert all(ev.callback.target is None for ev in compiled.integrator.t_events)
+
+
+@pytest.mark.parametrize("stop", ["40", "4000"])
+def test_progress_reports_each_kept_step_once_in_order(stop):
+    """The first call may be cut after its first steps and taken again (the span estimate):
+    its progress is held until its steps are kept, so the times reported never go back and
+    there is one per step — for a run shorter than that first call (89 steps) and longer
+    (~8900)."""
+    times: list[float] = []
+    result = ch.run(
+        _scene(output={"times": {"start": "0", "stop": stop, "count": 81}}), progress=times.append
+    )
+    assert len(times) == result.counters["steps"]
+    assert np.all(np.diff(times) > 0) and times[-1] == float(stop)
