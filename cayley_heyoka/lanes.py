@@ -231,7 +231,7 @@ def propagate_members(
         Once set, the lanes stop after their current call (members not finished are None).
     terminal
         Each member's terminal events (its own model's, whose handlers may keep state of their
-        own); default: copies of ``model``'s for every member.
+        own; each member runs copies of them); default: ``model``'s for every member.
     final_only
         Keep only each member's last state (:class:`Finals`).
 
@@ -243,7 +243,7 @@ def propagate_members(
     compiled, _ = compile_batch(model, options)
     members = len(initial)
     if terminal is None:
-        terminal = _Copies(model.terminal)
+        terminal = _Shared(model.terminal)
     results = _Finals(members, len(model.system)) if final_only else _Everything(members, model)
     starts = iter(range(0, members, compiled.width))
     lock = threading.Lock()
@@ -328,31 +328,15 @@ class _LaneTerminal:
         return self.target(self.index, ta, lane)
 
 
-class _Copies:
-    """Every member's own copy of shared terminal events (:func:`own_terminal`)."""
+class _Shared:
+    """The model's terminal events for every member (each takes its own copies of them:
+    :meth:`_Lanes._member`)."""
 
     def __init__(self, specs: Sequence[TerminalSpec]) -> None:
         self.specs = specs
 
-    def __getitem__(self, index: int) -> list[TerminalSpec]:
-        return own_terminal(self.specs)
-
-
-class _Refilled:
-    """Members one at a time from ``next_block``'s batches."""
-
-    def __init__(self, next_block: Callable[[], list[int]]) -> None:
-        self.next_block, self.buffer = next_block, iter(())
-
-    def __iter__(self) -> _Refilled:
-        return self
-
-    def __next__(self) -> int:
-        index = next(self.buffer, None)
-        if index is None:
-            self.buffer = iter(self.next_block())
-            index = next(self.buffer)  # StopIteration once every member is taken
-        return index
+    def __getitem__(self, index: int) -> Sequence[TerminalSpec]:
+        return self.specs
 
 
 class _LaneView:
