@@ -393,9 +393,9 @@ class Propagation:
         self._next_row: Any = None
         #: Output times recorded so far.
         self.done = 0
-        # The first steps estimate what the whole span needs (``_estimate``); the first call
-        # is cut short to take them (``_PROBE_STEPS``).
-        self._first_call, self._estimated = True, False
+        # The first steps estimate what the whole span needs (``_estimate``): the limits of
+        # the probing calls still to make, each cut short to take them and then taken again.
+        self._probes = list(_PROBES)
 
     @property
     def time(self) -> Any:
@@ -433,9 +433,9 @@ class Propagation:
                 if not self._poisoning:
                     self._propagate(until, end, budget, states, pars_rows)
                 else:
-                    if self._first_call:
-                        # The first call takes at most _PROBE_STEPS steps (~ms in double):
-                        # here, without a thread; a run that needs no more ends with it.
+                    if self._probes:
+                        # The first call takes at most _PROBES[0] steps (µs in double): here,
+                        # without a thread; a run that needs no more ends with it.
                         self._propagate(until, end, budget, states, pars_rows, calls=1)
                     if self.status == 0 and (self.done < end or self._ta.time < until):
                         _WORKER.run(
@@ -517,20 +517,19 @@ class Propagation:
             callback = self._callback
             if callback is None and self._signals.active and not self._poisoning:
                 callback = self._signals.callback
-            first, self._first_call = self._first_call, False
-            limit = min(left, _PROBE_STEPS) if first else left
-            if first and isinstance(callback, _ProgressCallback):
-                # Progress is reported once a step is kept: a cut first call is taken again.
+            probe = self._probes[0] if self._probes else None
+            limit = left if probe is None else min(left, probe)
+            if probe is not None and isinstance(callback, _ProgressCallback):
+                # Progress is reported once a step is kept: a cut probe is taken again.
                 callback = _HeldProgress(callback)
             self._rows, self._rows_pars = grid[i : i + outputs], []
             self._next_row = grid[i] if outputs else None
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
             outcome, out = res[0], res[-1]
             taken = self.counters["steps"] + res[3]
-            cut = first and outcome == hy.taylor_outcome.step_limit and limit < left
-            if not self._estimated and (taken >= _PROBE_MIN_STEPS or cut):
-                self._estimated = True
-                self._estimate(taken, ta.time, budget)
+            cut = probe is not None and outcome == hy.taylor_outcome.step_limit and limit < left
+            if probe is not None:
+                self._estimate(taken, ta.time, budget, cut)
             if cut:
                 # Resuming this call would change bits (see below): start again, uncut.
                 ta = self._restart()
@@ -598,28 +597,31 @@ class Propagation:
         ta.pars[:] = self._pars[: self._held]
         return ta
 
-    def _estimate(self, steps: int, reached: Any, budget: int) -> None:
-        """Refuse a run whose first steps show it needs far more steps than its budget.
+    def _estimate(self, steps: int, reached: Any, budget: int, cut: bool) -> None:
+        """After a probing call: refuse a run whose first steps show it needs far more steps
+        than its budget, or decide whether a longer probe must look first.
 
         A span of 1e300 would otherwise spend the whole budget (10⁹ steps: many minutes)
-        before stopping. The rate of the first steps (at least :data:`_PROBE_MIN_STEPS`, or
-        the :data:`_PROBE_STEPS` of a first call that did not reach its end) extrapolated
-        over the span must stay within :data:`_ESTIMATE_MARGIN` times the budget; the margin
-        leaves room for motions whose steps lengthen (an estimate, so only the absurd is
-        refused).
+        before stopping. The rate of the first steps (those of a probing call, at most
+        :data:`_PROBES`) extrapolated over the span must stay within :data:`_ESTIMATE_MARGIN`
+        times the budget; the margin leaves room for motions whose steps lengthen (an
+        estimate, so only the absurd is refused). The first probe is short, so that a run
+        pays for it a few steps only: when its estimate is not :data:`_CLEAR` times inside
+        the limit, a longer probe decides.
         """
-        if steps < _PROBE_MIN_STEPS:
+        probes = self._probes
+        probes.pop(0)
+        if not cut:
+            probes.clear()  # the call ended of itself: nothing is taken again
+        needed = self._needed(steps, reached) if steps >= _PROBES[0] else None
+        if needed is None:
             return
-        first, last = self.scene.output.span()
-        start, stop = exact_fraction(first), exact_fraction(last)
-        try:
-            covered = exact_fraction(str(reached)) - start
-        except (ValueError, ArithmeticError):  # the state (and heyoka's time) became NaN
-            return
-        if covered <= 0:
-            return
-        needed = steps * (stop - start) / covered
-        if needed > _ESTIMATE_MARGIN * budget:
+        limit = _ESTIMATE_MARGIN * budget
+        if cut and probes and needed * _CLEAR > limit:
+            return  # not clearly within the budget: the next, longer probe decides
+        probes.clear()
+        if needed > limit:
+            first, last = self.scene.output.span()
             raise SceneError(
                 "output.times",
                 f"the span to t = {last} needs about "
@@ -627,6 +629,19 @@ class Propagation:
                 f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
                 "shorten the span, or raise integrator.max_steps if the steps will lengthen",
             )
+
+    def _needed(self, steps: int, reached: Any) -> Fraction | None:
+        """The steps the whole span needs at the rate of ``steps`` to ``reached`` (None if
+        that cannot be told: no time covered, or a non-finite time)."""
+        first, last = self.scene.output.span()
+        start, stop = exact_fraction(first), exact_fraction(last)
+        try:
+            covered = exact_fraction(str(reached)) - start
+        except (ValueError, ArithmeticError):  # the state (and heyoka's time) became NaN
+            return None
+        if covered <= 0:
+            return None
+        return steps * (stop - start) / covered
 
     def _out_of_steps(self, budget: int) -> None:
         self.status = -1
@@ -694,7 +709,7 @@ class Propagation:
         """Continue from a :meth:`snapshot` of a run of the same scene."""
         prec, ta = self.precision, self._ta
         # Its first steps were taken (and the span estimated) before the snapshot.
-        self._first_call, self._estimated = False, True
+        self._probes = []
         self.done = int(snapshot["done"])
         hi, lo = prec.from_text(snapshot["time"])
         ta.dtime = (hi, lo)
@@ -751,11 +766,12 @@ class Propagation:
 
 
 # ---------------------------------------------------------------------- internals
-#: Steps at most of a run's first call (a run that needs more starts again after it, so that
-#: its bits do not depend on the cut); :meth:`Propagation._estimate` extrapolates from the
-#: first ``_PROBE_MIN_STEPS`` or more.
-_PROBE_STEPS = 1_000
-_PROBE_MIN_STEPS = 16
+#: Steps at most of a run's probing calls (a run that needs more starts again after each, so
+#: that its bits do not depend on the cut; :meth:`Propagation._estimate` extrapolates from
+#: them): a short one, and a longer one only when the short one's estimate is not
+#: ``_CLEAR`` times inside ``_ESTIMATE_MARGIN`` times the budget.
+_PROBES = (16, 1_000)
+_CLEAR = 100
 _ESTIMATE_MARGIN = 10
 
 

@@ -233,7 +233,12 @@ class OutputOptions:
             start, stop, count = self.grid
             a, b = precision.number(start), precision.number(stop)
             n = precision.number(count - 1)
-            grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
+            if precision.kind == "double":
+                # The same operations, element by element, as the loop below (k is exact):
+                # numpy does them in microseconds where the loop took ~3 µs a time.
+                grid = a + (b - a) * np.arange(count, dtype=np.float64) / n
+            else:
+                grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
         wild = np.flatnonzero(~np.isfinite(grid))
         if len(wild):
             raise SceneError(

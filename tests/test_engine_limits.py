@@ -282,14 +282,41 @@ def test_a_span_within_the_budget_runs(monkeypatch):
         return ch.Scene.from_dict(data)
 
     whole = ch.run(scene())
-    assert whole.counters["steps"] > 2 * engine._PROBE_STEPS
-    monkeypatch.setattr(engine, "_PROBE_STEPS", 10**12)
+    assert whole.counters["steps"] > 2 * max(engine._PROBES)
+    monkeypatch.setattr(engine, "_PROBES", ())
     uncut = ch.run(scene())
     assert whole.counters == uncut.counters
     _same(whole, uncut)
     monkeypatch.undo()
     snug = ch.run(scene(max_steps=whole.counters["steps"] + 1))
     _same(snug, whole)
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+def test_a_run_well_inside_its_budget_pays_only_the_short_probe(monkeypatch, terminal):
+    """The estimate's first probe is short (16 steps), so a run pays a few steps for it; the
+    longer probe (1000 steps) is taken only when the short one's estimate is not clearly
+    within the budget — here a budget of a few times the run's steps."""
+    data = free_body(
+        attitude={"formulation": "rodrigues" if terminal else "quaternion"},
+        output={"times": {"start": "0", "stop": "1000", "count": 101}},
+    )
+    cuts: list[int] = []
+    restart = engine.Propagation._restart
+
+    def counted(self):
+        cuts.append(1)
+        return restart(self)
+
+    monkeypatch.setattr(engine.Propagation, "_restart", counted)
+    whole = ch.run(ch.Scene.from_dict(data))
+    assert whole.counters["steps"] > 1000 and len(cuts) == 1
+    cuts.clear()
+    data["integrator"] = {"max_steps": 3 * whole.counters["steps"]}
+    tight = ch.run(ch.Scene.from_dict(data))
+    assert len(cuts) == 2
+    assert tight.counters == whole.counters
+    _same(tight, whole)
 
 
 def test_a_signal_stops_a_run_without_progress_bar_or_terminal_events(tmp_path):

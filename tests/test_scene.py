@@ -250,3 +250,18 @@ def test_long_sums_are_folded_as_python_would():
     values = np.array([[0.3], [-1.7]])
     both = hy.cfunc([built, expected], [p, q])(values)
     assert both[0, 0] == both[1, 0]
+
+
+@pytest.mark.parametrize(
+    "start, stop, count", [("0", "10", 1001), ("-3.7", "0.1", 77), ("1e-5", "2e10", 4096)]
+)
+def test_a_double_grid_is_built_as_each_time_alone_would_be(start, stop, count):
+    """The double grid is computed by numpy at once; each time is the one the scene's rule
+    gives alone, start + (stop − start)·k/(count − 1) rounded operation by operation."""
+    scene = Scene.from_dict(
+        free_body(output={"times": {"start": start, "stop": stop, "count": count}})
+    )
+    p = Precision("double")
+    a, b, n = p.number(start), p.number(stop), p.number(count - 1)
+    alone = [a + (b - a) * p.number(k) / n for k in range(count)]
+    assert scene.output.time_grid(p).tolist() == alone
