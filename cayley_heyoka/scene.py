@@ -235,8 +235,10 @@ class OutputOptions:
             n = precision.number(count - 1)
             if precision.kind == "double":
                 # The same operations, element by element, as the loop below (k is exact):
-                # numpy does them in microseconds where the loop took ~3 µs a time.
-                grid = a + (b - a) * np.arange(count, dtype=np.float64) / n
+                # numpy does them in microseconds where the loop took ~3 µs a time. (An
+                # overflowing span gives NaN as the loop did, refused below without a warning.)
+                with np.errstate(all="ignore"):
+                    grid = a + (b - a) * np.arange(count, dtype=np.float64) / n
             else:
                 grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
         wild = np.flatnonzero(~np.isfinite(grid))
