@@ -676,8 +676,7 @@ class Propagation:
         """The output rows up to ``t`` (a terminal event's time) were computed before its
         handler: they keep the parameters in force now (a row exactly at ``t`` too)."""
         rows, given = self._rows, self._rows_pars
-        while len(given) < len(rows) and rows[len(given)] <= t:
-            given.append(self._pars.copy())
+        pass_rows(rows, given, t, self._pars)
         self._next_row = rows[len(given)] if len(given) < len(rows) else None
 
     def snapshot(self) -> dict[str, Any]:
@@ -810,25 +809,34 @@ class _Recorder:
 
 
 class TerminalCallback:
-    """The callback of a terminal event: hands the event to ``target(index, integrator)``,
-    which returns whether the integration goes on.
+    """The callback of a terminal event: hands the event to ``target(index, integrator)``
+    (a batch integrator's: ``target(index, integrator, lane)``), which returns whether the
+    integration (the lane) goes on.
 
     The engine points ``target`` at the run using the integrator
-    (:meth:`Propagation._on_terminal`). heyoka copies an integrator's callbacks with it; a copy
-    starts without a target (an integrator's copy serves another run).
+    (:meth:`Propagation._on_terminal`; the lanes at :mod:`.lanes`'s). heyoka copies an
+    integrator's callbacks with it; a copy starts without a target (it serves another run).
     """
 
     def __init__(self, index: int) -> None:
         self.index = index
-        self.target: Callable[[int, Any], bool] | None = None
+        self.target: Callable[..., bool] | None = None
 
     def __deepcopy__(self, memo: dict) -> TerminalCallback:
         return TerminalCallback(self.index)
 
-    def __call__(self, ta: Any, d_sgn: Any) -> bool:
+    def __call__(self, ta: Any, d_sgn: Any, *lane: int) -> bool:
         if self.target is None:
             raise RuntimeError("a terminal event reached with no run to handle it")
-        return self.target(self.index, ta)
+        return self.target(self.index, ta, *lane)
+
+
+def pass_rows(rows: np.ndarray, given: list[np.ndarray], t: Any, pars: np.ndarray) -> None:
+    """Give the output rows up to ``t`` (a terminal event's time; increasing ``rows``, the
+    first ``len(given)`` already given) a copy of ``pars``: they were computed before the
+    event's handler changes the parameters (a row exactly at ``t`` too)."""
+    while len(given) < len(rows) and rows[len(given)] <= t:
+        given.append(pars.copy())
 
 
 class _ProgressCallback:

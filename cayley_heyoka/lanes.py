@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -173,7 +173,9 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
         ]
         te = [
             hy.t_event_batch(
-                e.expression, direction=engine.event_direction(e), callback=_LaneTerminal(i)
+                e.expression,
+                direction=engine.event_direction(e),
+                callback=engine.TerminalCallback(i),
             )
             for i, e in enumerate(model.terminal)
         ]
@@ -308,24 +310,6 @@ class _LaneRecorder:
 
     def take(self, lane: int) -> tuple[list[float], list[int]]:
         return self.times.pop(lane, []), self.directions.pop(lane, [])
-
-
-class _LaneTerminal:
-    """Terminal event callback of a batch integrator: hands lane ``lane``'s event to
-    ``target(index, integrator, lane)``, which returns whether that lane goes on (see
-    :class:`cayley_heyoka.engine.TerminalCallback`)."""
-
-    def __init__(self, index: int) -> None:
-        self.index = index
-        self.target: Callable[[int, Any, int], bool] | None = None
-
-    def __deepcopy__(self, memo: dict) -> _LaneTerminal:
-        return _LaneTerminal(self.index)
-
-    def __call__(self, ta: Any, d_sgn: Any, lane: int) -> bool:
-        if self.target is None:
-            raise RuntimeError("a terminal event reached with no lanes to handle it")
-        return self.target(self.index, ta, lane)
 
 
 class _Shared:
@@ -631,11 +615,8 @@ class _Lanes:
         if m is None:
             raise RuntimeError(f"lane {lane} reached a terminal event with no member")
         t = ta.time[lane]
-        rows, given = m.rows, m.rows_pars
-        if rows is not None:
-            # Output rows up to here were computed before this handler (see the engine's).
-            while len(given) < len(rows) and rows[len(given)] <= t:
-                given.append(m.pars.copy())
+        if m.rows is not None:
+            engine.pass_rows(m.rows, m.rows_pars, t, m.pars)
         spec = m.terminal[index]
         stop = spec.handle(_LaneView(ta, lane), m.pars)
         ta.pars[:, lane] = m.pars[: self.held]
