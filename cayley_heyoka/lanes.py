@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -258,10 +258,15 @@ def propagate_members(
 
     def work() -> None:
         ta = compiled.take()
+        poison = _Poison(ta)
+        if isinstance(cancel, Cancel):
+            cancel.watch(poison)
         try:
             lanes = _Lanes(ta, compiled.width, model, options, grid, next_block, results, cancel)
             lanes.run(initial, pars, terminal)
         finally:
+            if isinstance(cancel, Cancel):
+                cancel.unwatch(poison)
             for ev in ta.t_events if model.terminal else ():
                 ev.callback.target = None  # no reference from a spare integrator to the lanes
             compiled.give(ta)
@@ -310,6 +315,45 @@ class _LaneRecorder:
 
     def take(self, lane: int) -> tuple[list[float], list[int]]:
         return self.times.pop(lane, []), self.directions.pop(lane, [])
+
+
+class Cancel(threading.Event):
+    """A cancel flag that also stops the batch calls in flight, as the engine's watch stops a
+    scalar run (:class:`cayley_heyoka.engine._Watch`): :meth:`set` makes the parameters of the
+    integrators stepping non-finite, so heyoka returns after its current step instead of at
+    the end of a call that may cover a member's whole span. What those calls computed is
+    dropped (their members are not finished)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._hooks: list[Callable[[], None]] = []
+        self._lock = threading.Lock()
+
+    def watch(self, hook: Callable[[], None]) -> None:
+        with self._lock:
+            self._hooks.append(hook)
+
+    def unwatch(self, hook: Callable[[], None]) -> None:
+        with self._lock:
+            self._hooks.remove(hook)
+
+    def set(self) -> None:
+        super().set()
+        with self._lock:
+            hooks = list(self._hooks)
+        for hook in hooks:
+            hook()
+
+
+class _Poison:
+    """Makes a batch integrator's parameters NaN (a :class:`Cancel` hook; a system without
+    parameters steps on to the end of its call)."""
+
+    def __init__(self, ta: Any) -> None:
+        self.ta = ta
+
+    def __call__(self) -> None:
+        self.ta.pars[:] = np.nan
 
 
 class _Shared:
@@ -394,6 +438,9 @@ class _Lanes:
             if not self._at_once(block):
                 self._lane_by_lane(iter(block))
 
+    def _cancelled(self) -> bool:
+        return self.cancel is not None and self.cancel.is_set()
+
     def _member(self, index: int) -> _Member:
         """Member ``index`` at its start: its parameters, its own terminal handlers."""
         specs = own_terminal(self.terminal[index])
@@ -432,6 +479,8 @@ class _Lanes:
             rec.clear()
         if ta.with_events:
             ta.reset_cooldowns()
+        if self._cancelled():
+            return True  # nothing recorded: the block's members stay unfinished
         if len(grid) == 2:
             # Two points: the start and where propagate_until ends (an ensemble's case; the
             # same steps as a grid's, and its last output is the state it ends at).
@@ -448,6 +497,8 @@ class _Lanes:
             out = ta.state.copy()[None, :, :]
             res = [(hy.taylor_outcome.time_limit, 0, 0, 0)] * width
         self.lanes, self.twins = [None] * width, [None] * width
+        if self._cancelled():
+            return True  # a cancel may have poisoned the call: nothing of it is recorded
         end, times = grid[-1], ta.time
         done = hy.taylor_outcome.time_limit
         if any(res[j][0] != done or times[j] != end for j in range(len(block))):
@@ -471,7 +522,7 @@ class _Lanes:
         for j in range(self.width):
             self._assign(j)
         while any(m is not None for m in self.lanes):
-            if self.cancel is not None and self.cancel.is_set():
+            if self._cancelled():
                 return
             self._step()
         self.twins = [None] * self.width
@@ -543,8 +594,12 @@ class _Lanes:
         for j in range(width):
             table[:, j] = _padded(columns[j][0], length)
         left = min(self.budget - self.lanes[j].steps for j in busy)
+        if self._cancelled():
+            return
         out = ta.propagate_grid(table, max_steps=left, **self.limit)[-1]
         outcomes = ta.propagate_res
+        if self._cancelled():
+            return  # a cancel may have poisoned the call: its members stay unfinished
         for rec in self.recorders:
             for j in range(width):
                 if self.lanes[j] is None:

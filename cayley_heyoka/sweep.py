@@ -310,8 +310,10 @@ def _pipeline(
     members stay NOT_RUN) after its lanes' current call."""
     from concurrent.futures import ThreadPoolExecutor
 
+    from . import lanes
+
     prec = study.precision
-    cancel = threading.Event()
+    cancel = lanes.Cancel()
     pending = None
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:

@@ -519,3 +519,33 @@ def test_lane_columns_are_padded_in_their_widest_gap_or_refused():
     assert set(points) <= set(padded)
     with pytest.raises(ValueError, match="output.times"):
         _padded(np.array([1.0, np.nextafter(1.0, 2.0)]), 5)
+
+
+@pytest.mark.parametrize("scene", [BODY, RODRIGUES], ids=["quaternion", "rodrigues"])
+def test_a_cancel_stops_the_batch_calls_in_flight(scene):
+    """A batch call covers its members' whole span; a cancel (Ctrl-C in a sweep) makes the
+    integrators' parameters NaN, so heyoka returns after its current step and the members in
+    flight stay unfinished, instead of stepping on to t = 1e7 (hours: a hang)."""
+    import threading
+
+    from cayley_heyoka import lanes
+    from cayley_heyoka.engine import model_of
+
+    data = {**scene, "output": {"times": {"start": "0", "stop": "1e7", "count": 3}}}
+    member = ch.Scene.from_dict(data)
+    model = model_of(member)
+    grid = member.output.time_grid(member.integrator.precision)
+    initial = np.repeat(np.array(model.initial_state, dtype=float)[None, :], 12, axis=0)
+    pars = np.repeat(np.array(model.pars.values, dtype=float)[None, :], 12, axis=0)
+    cancel = lanes.Cancel()
+    out: list = []
+    worker = threading.Thread(
+        target=lambda: out.append(
+            lanes.propagate_members(model, member.integrator, grid, initial, pars, 1, cancel)
+        )
+    )
+    worker.start()
+    threading.Timer(0.5, cancel.set).start()
+    worker.join(timeout=120)  # a hang check, not a timing: uncancelled, this runs for hours
+    assert not worker.is_alive() and len(out) == 1
+    assert all(r is None for r in out[0])
