@@ -230,7 +230,8 @@ def propagate_members(
     threads
         Batch integrators run at once, each on its share of the members.
     cancel
-        Once set, the lanes stop after their current call (members not finished are None).
+        Once set, the lanes stop (a :class:`Cancel` within a step, another after their current
+        call); members not finished are None.
     terminal
         Each member's terminal events (its own model's, whose handlers may keep state of their
         own; each member runs copies of them); default: ``model``'s for every member.

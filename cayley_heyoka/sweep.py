@@ -272,8 +272,8 @@ def integrate_members(
 ) -> Chunk:
     """The second half of :func:`propagate_members`: integrate the groups and fill the rows.
 
-    ``cancel``, once set, ends the lanes after their current call (the chunk is then
-    incomplete: the caller drops it).
+    ``cancel``, once set, ends the lanes (within a step if a :class:`.lanes.Cancel`); the
+    chunk is then incomplete: the caller drops it.
     """
     part, groups = prepared
     for group in groups.values():
@@ -307,7 +307,7 @@ def _pipeline(
     """Chunk by chunk, building the next chunk's models while the current one integrates:
     heyoka steps without the GIL, so the Python work of one overlaps the stepping of the other.
     An exception (Ctrl-C in ``take``'s progress) cancels the chunk in flight (dropped: its
-    members stay NOT_RUN) after its lanes' current call."""
+    members stay NOT_RUN) within a step (:class:`.lanes.Cancel`)."""
     from concurrent.futures import ThreadPoolExecutor
 
     from . import lanes
