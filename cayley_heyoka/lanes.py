@@ -667,6 +667,8 @@ class _Lanes:
     def _on_terminal(self, index: int, ta: Any, lane: int) -> bool:
         """Terminal event ``index`` of lane ``lane``, within heyoka's call: its member's
         handler on a view of the lane (:class:`_LaneView`); whether the lane goes on."""
+        if self._cancelled():
+            return False  # its parameters may hold a Cancel's poison: stop the lane
         m = self.lanes[lane] or self.twins[lane]
         if m is None:
             raise RuntimeError(f"lane {lane} reached a terminal event with no member")
@@ -682,6 +684,8 @@ class _Lanes:
             if spec.records is not None:
                 m.stopped_at = (spec.records, t, spec.direction)
             return False
+        if self._cancelled():
+            ta.pars[:, lane] = np.nan  # a Cancel's poison was overwritten just above
         return True
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
