@@ -58,6 +58,7 @@ import re
 import sys
 import tempfile
 import time
+import types
 from decimal import Decimal
 from pathlib import Path
 from typing import Any
@@ -541,7 +542,7 @@ class _KeplerClockEncke(encke_module.Encke):
         δ moved to the anomaly kepE returns for it (in long double), τ = 0, and the clock."""
         e, E0 = p["e"], 2 * st[6]
         M0 = float(E0 - e * np.sin(E0))
-        ar = encke_module._LongDouble()
+        ar = types.SimpleNamespace(sin=np.sin, cos=np.cos)  # long double, by numpy
         y0, v0 = encke_module._ellipse(ar, p, E0)
         y1, v1 = encke_module._ellipse(ar, p, _kepler_ld(e, LD(M0)))
         for i in range(3):
