@@ -470,7 +470,7 @@ def extended(times: np.ndarray, ta: Any, start: State = START) -> tuple[np.ndarr
     return res[-1].T, int(res[3])
 
 
-# ------------------------------------------------------------------ Encke: Python share, time
+# ------------------------------------------------------------ Encke: the handler's share of time
 class _TimedEncke(encke_module.Encke):
     """The library's rectification handler, timed (for the share of the wall time it takes)."""
 
@@ -1151,13 +1151,14 @@ def explanation(long: dict[str, Any], ens: dict[str, Any]) -> list[str]:
             "Battin's form takes the difference of the two central forces without "
             "cancellation. A terminal event rectifies at every apocentre (where the motion is "
             "slowest; the prototype lost up to 25× rectifying at an arbitrary phase), in "
-            f"long double. Over {long['n']} orbits at tolerance ε its final position error "
+            "long double (compiled by heyoka, called from Python). "
+            f"Over {long['n']} orbits at tolerance ε its final position error "
             f"({fmt(enc.final)}) is {_cmp(enc.final, ias.final)} IAS15's and its largest "
             f"energy error {_cmp(enc.max_energy, ias.max_energy)}"
             + (f" ({_cmp(med['encke'], I)} over the ensemble)" if "encke" in med else "")
             + f", for {_x(enc.wall, ias.wall)} IAS15's wall time"
             + (
-                f", of which {100 * python:.0f} % is the rectification in Python"
+                f", of which {100 * python:.0f} % is the rectification handler"
                 if math.isfinite(python)
                 else ""
             )
