@@ -46,7 +46,7 @@ parameter once to the run's precision, and computes δ from the curve those roun
 define, so that ``y + δ`` is continuous across a rectification to the extended precision. For
 double runs on x86-64 the extended precision is the 80-bit long double and the handler's
 formulas are compiled by heyoka in it (two functions, the rounding to double between them:
-~10 µs a rectification against ~45 µs as numpy scalars); elsewhere, and for quad and
+~15 µs a rectification against 40–60 µs as numpy scalars); elsewhere, and for quad and
 multiprecision runs, it is mpmath with 64 guard bits. An osculating orbit that is not an
 ellipse (e ≥ 1) ends the run there.
 """
