@@ -17,32 +17,50 @@ from typing import TYPE_CHECKING, Any
 # session of an environment that has cayley_heyoka installed, imports this package, and
 # importing heyoka costs ~0.4 s.
 _EXPORTS = {
-    "clear_cache": "engine",
-    "compile_model": "engine",
-    "run": "engine",
-    "EnsembleError": "ensemble",
-    "EnsembleResult": "ensemble",
-    "propagate_ensemble": "ensemble",
-    "IntegrationError": "errors",
-    "Interrupted": "errors",
-    "SceneError": "errors",
-    "OutputError": "files",
-    "ResultFileError": "files",
-    "Precision": "precision",
-    "EventLog": "result",
-    "Result": "result",
-    "Scene": "scene",
-    "load_scene": "scene",
+    "clear_cache": "core.engine",
+    "compile_model": "core.engine",
+    "run": "core.engine",
+    "EnsembleError": "workflows.ensemble",
+    "EnsembleResult": "workflows.ensemble",
+    "propagate_ensemble": "workflows.ensemble",
+    "IntegrationError": "core.errors",
+    "Interrupted": "core.errors",
+    "SceneError": "core.errors",
+    "OutputError": "core.files",
+    "ResultFileError": "core.files",
+    "Precision": "core.precision",
+    "EventLog": "core.result",
+    "Result": "core.result",
+    "Scene": "core.scene",
+    "load_scene": "core.scene",
+    "check_scene": "workflows.checks",
+    "ensemble_state": "workflows.ensemble",
+    "generate_reference": "workflows.reference",
+    "read_certificate": "workflows.reference",
+    "run_sweep": "workflows.sweep",
+    "load_sweep": "workflows.sweep_result",
 }
+#: Public submodules, loaded on first use (``from cayley_heyoka import plots``).
+_MODULES = {"plots": "workflows.plots"}
 
 if TYPE_CHECKING:
-    from .engine import clear_cache, compile_model, run
-    from .ensemble import EnsembleError, EnsembleResult, propagate_ensemble
-    from .errors import IntegrationError, Interrupted, SceneError
-    from .files import OutputError, ResultFileError
-    from .precision import Precision
-    from .result import EventLog, Result
-    from .scene import Scene, load_scene
+    from .core.engine import clear_cache, compile_model, run
+    from .core.errors import IntegrationError, Interrupted, SceneError
+    from .core.files import OutputError, ResultFileError
+    from .core.precision import Precision
+    from .core.result import EventLog, Result
+    from .core.scene import Scene, load_scene
+    from .workflows import plots
+    from .workflows.checks import check_scene
+    from .workflows.ensemble import (
+        EnsembleError,
+        EnsembleResult,
+        ensemble_state,
+        propagate_ensemble,
+    )
+    from .workflows.reference import generate_reference, read_certificate
+    from .workflows.sweep import run_sweep
+    from .workflows.sweep_result import load_sweep
 
 
 def __getattr__(name: str) -> Any:
@@ -50,6 +68,10 @@ def __getattr__(name: str) -> Any:
         # Looked up when asked for: importing importlib.metadata costs ~15 ms, a tenth of the
         # command line's start (validation/users_cli.py).
         globals()[name] = value = _version()
+        return value
+    if name in _MODULES:
+        value = import_module(f".{_MODULES[name]}", __name__)
+        globals()[name] = value
         return value
     module = _EXPORTS.get(name)
     if module is None:
@@ -60,7 +82,7 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_EXPORTS, "__version__"})
+    return sorted({*globals(), *_EXPORTS, *_MODULES, "__version__"})
 
 
 def _version() -> str:
@@ -74,7 +96,7 @@ def _version() -> str:
 
 def load_result(path: str) -> Result:
     """Read a result file written by :meth:`Result.save`."""
-    from .result import Result
+    from .core.result import Result
 
     return Result.load(path)
 
@@ -91,10 +113,17 @@ __all__ = [
     "ResultFileError",
     "Scene",
     "SceneError",
+    "check_scene",
     "clear_cache",
     "compile_model",
+    "ensemble_state",
+    "generate_reference",
     "load_result",
     "load_scene",
+    "load_sweep",
+    "plots",
     "propagate_ensemble",
+    "read_certificate",
     "run",
+    "run_sweep",
 ]

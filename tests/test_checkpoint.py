@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import cayley_heyoka as ch
-from cayley_heyoka.checkpoint import CheckpointedRun, CheckpointMismatch
+from cayley_heyoka.workflows.checkpoint import CheckpointedRun, CheckpointMismatch
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import cayley_heyoka.engine as engine
+import cayley_heyoka.core.engine as engine
 from cayley_heyoka import Scene, load_scene
-from cayley_heyoka.checks import CheckOptions, check_scene
 from cayley_heyoka.cli import main
+from cayley_heyoka.workflows.checks import CheckOptions, check_scene
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SCENES = sorted(p.name for p in EXAMPLES.glob("*.toml"))

@@ -16,10 +16,11 @@ from pathlib import Path
 
 import pytest
 
-from cayley_heyoka import plots, reference_run, study
 from cayley_heyoka.cli import plot as plot_verb
 from cayley_heyoka.cli import reference as reference_verb
 from cayley_heyoka.cli import sweep as sweep_verb
+from cayley_heyoka.workflows import plots, study
+from cayley_heyoka.workflows import reference as reference_run
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).resolve().parent / "data" / "files"

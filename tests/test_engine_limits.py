@@ -16,8 +16,8 @@ import pytest
 from helpers import free_body
 
 import cayley_heyoka as ch
-from cayley_heyoka import engine
-from cayley_heyoka.errors import IntegrationError, Interrupted, SceneError
+from cayley_heyoka.core import engine
+from cayley_heyoka.core.errors import IntegrationError, Interrupted, SceneError
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 HEAVY_TOP = {"heavy_top": {"weight": "1", "center_of_mass": ["0.1", "-0.05", "0.3"]}}

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cayley_heyoka as ch
-from cayley_heyoka.ensemble import (
+from cayley_heyoka.workflows.ensemble import (
     MODES,
     EnsembleError,
     ensemble_state,

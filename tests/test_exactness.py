@@ -33,10 +33,10 @@ import pytest
 import sympy
 
 from cayley_heyoka import Scene, run
-from cayley_heyoka.families import FAMILIES
-from cayley_heyoka.model import Model
-from cayley_heyoka.precision import Precision, decimal_text
-from cayley_heyoka.scene import read_toml
+from cayley_heyoka.core.families import FAMILIES
+from cayley_heyoka.core.model import Model
+from cayley_heyoka.core.precision import Precision, decimal_text
+from cayley_heyoka.core.scene import read_toml
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 PRECISIONS = {"quad": "quad", "real256": {"bits": 256}}

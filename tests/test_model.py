@@ -5,7 +5,7 @@ from __future__ import annotations
 import heyoka as hy
 
 from cayley_heyoka import Scene
-from cayley_heyoka.model import Model, ParTable
+from cayley_heyoka.core.model import Model, ParTable
 
 
 def _model(k: float) -> Model:
@@ -26,8 +26,8 @@ def test_systems_differing_deep_inside_long_expressions_do_not_share_code():
 def test_compact_mode_rule():
     """'auto' compiles compact in extended precision, for models that ask, and for large
     systems (validation/BENCHMARKS.md, 'setup'); the scene's explicit choice wins."""
-    from cayley_heyoka.engine import COMPACT_THRESHOLD, use_compact_mode
-    from cayley_heyoka.families import FAMILIES
+    from cayley_heyoka.core.engine import COMPACT_THRESHOLD, use_compact_mode
+    from cayley_heyoka.core.families import FAMILIES
 
     def decide(precision, compact="auto"):
         d = {

@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 
 import cayley_heyoka as ch
 from cayley_heyoka.cli import main
-from cayley_heyoka.plots import (
+from cayley_heyoka.workflows.plots import (
     PlotError,
     _read_sweep,
     crossings,
@@ -285,7 +285,10 @@ def test_missing_matplotlib_names_the_extra(free, tmp_path, monkeypatch, capsys)
 
 
 def test_the_command_line_does_not_import_matplotlib():
-    code = "import sys, cayley_heyoka.cli, cayley_heyoka.plots; print('matplotlib' in sys.modules)"
+    code = (
+        "import sys, cayley_heyoka.cli, cayley_heyoka.workflows.plots; "
+        "print('matplotlib' in sys.modules)"
+    )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == "False"
 

@@ -9,8 +9,8 @@ import mpmath
 import pytest
 
 from cayley_heyoka import Scene, SceneError, run
-from cayley_heyoka.families import FAMILIES
-from cayley_heyoka.precision import (
+from cayley_heyoka.core.families import FAMILIES
+from cayley_heyoka.core.precision import (
     MAX_BITS,
     MAX_DECIMAL_EXPONENT,
     Precision,
@@ -270,7 +270,7 @@ def test_huge_numbers_give_clear_refusals_not_overflow_errors():
 def test_a_huge_angle_is_reduced_exactly(anomaly):
     """The mean anomaly 1e400 made Kepler's equation fail (ArithmeticError), and 1e25 came
     back as noise: reduced at the working precision only. Now it equals its exact reduction."""
-    from cayley_heyoka.orbit import elements as el
+    from cayley_heyoka.mechanics import kepler as el
 
     with mpmath.workdps(600):
         x = mpmath.mpf(anomaly)

@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 
 import cayley_heyoka as ch
-from cayley_heyoka.precision import Precision
+from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.reference import FreeRigidBody
-from cayley_heyoka.reference.evaluate import PARALLEL_FROM, Rounding
-from cayley_heyoka.reference_run import generate_reference, read_certificate
+from cayley_heyoka.workflows.closed_form import PARALLEL_FROM, Rounding
+from cayley_heyoka.workflows.reference import generate_reference, read_certificate
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -16,9 +16,9 @@ import pytest
 
 import cayley_heyoka as ch
 from cayley_heyoka.cli import main
-from cayley_heyoka.precision import Precision
+from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.reference import FreeRigidBody
-from cayley_heyoka.reference_run import (
+from cayley_heyoka.workflows.reference import (
     generate_reference,
     next_precision,
     precision_for,
@@ -283,7 +283,7 @@ def test_a_full_disk_at_the_end_keeps_the_checkpoints_and_the_rerun_writes(
 ):
     import errno
 
-    from cayley_heyoka import reference_run
+    from cayley_heyoka.workflows import reference as reference_run
 
     scene = tmp_path / "s.toml"
     scene.write_text(FREE_BODY.format(stop="2.0", count=3))

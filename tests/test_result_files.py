@@ -1,6 +1,6 @@
 """Our files on disk: destinations checked first, atomic saves, checksums, old versions read.
 
-The policy is in cayley_heyoka/files.py and docs/scenes.md ("Files").
+The policy is in cayley_heyoka/core/files.py and docs/scenes.md ("Files").
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ import pytest
 from helpers import free_body
 
 from cayley_heyoka import Result, Scene, run
-from cayley_heyoka.checks import CheckReport, CheckRow
 from cayley_heyoka.cli import main
-from cayley_heyoka.files import (
+from cayley_heyoka.cli.terminal import printable
+from cayley_heyoka.core.files import (
     DIGEST,
     FORMAT_VERSION,
     OutputError,
@@ -31,9 +31,9 @@ from cayley_heyoka.files import (
     seal,
     write_atomically,
 )
-from cayley_heyoka.reference_run import WORK_MARKER, generate_reference, read_certificate
-from cayley_heyoka.sweep_result import load_sweep
-from cayley_heyoka.terminal import printable
+from cayley_heyoka.workflows.checks import CheckReport, CheckRow
+from cayley_heyoka.workflows.reference import WORK_MARKER, generate_reference, read_certificate
+from cayley_heyoka.workflows.sweep_result import load_sweep
 
 DATA = Path(__file__).resolve().parent / "data" / "files"
 
@@ -275,7 +275,7 @@ _SLOW_SAVE = textwrap.dedent(
     """
     import sys, time
     from cayley_heyoka import load_result
-    from cayley_heyoka.files import write_hdf5
+    from cayley_heyoka.core.files import write_hdf5
 
     res = load_result(sys.argv[1])
 
@@ -316,7 +316,7 @@ def test_sigkill_during_a_save_keeps_the_previous_file(tmp_path, result, quad_re
 
 
 def test_sweep_whose_file_cannot_be_written_keeps_the_previous_one(tmp_path, capsys, monkeypatch):
-    from cayley_heyoka import sweep_result
+    from cayley_heyoka.workflows import sweep_result
 
     (tmp_path / "body.toml").write_text(
         "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [1, 0.1, 0.2]\n"

@@ -10,9 +10,9 @@ import pytest
 from helpers import free_body
 
 from cayley_heyoka import Precision, Scene, SceneError, load_scene
-from cayley_heyoka.expressions import parse_expression
-from cayley_heyoka.model import ParTable
-from cayley_heyoka.scene import DEFAULT_MAX_STEPS
+from cayley_heyoka.core.expressions import parse_expression
+from cayley_heyoka.core.model import ParTable
+from cayley_heyoka.core.scene import DEFAULT_MAX_STEPS
 
 
 def refuse(data, field, words):

@@ -15,7 +15,7 @@ import pytest
 
 import cayley_heyoka as ch
 from cayley_heyoka.cli import main
-from cayley_heyoka.sweep import (
+from cayley_heyoka.workflows.sweep import (
     FAILED,
     NOT_RUN,
     OK,
@@ -258,7 +258,7 @@ def test_lane_members_do_not_depend_on_their_lane_mates(body_sweep):
     s, result, _ = body_sweep
     order = [4, 1, 5, 0, 3, 2]
     members = s.members()
-    from cayley_heyoka.sweep import layout_of, propagate_members
+    from cayley_heyoka.workflows.sweep import layout_of, propagate_members
 
     layout = layout_of(s)
     part = propagate_members(s, [(i, members[i]) for i in order], layout, threads=1)
@@ -318,7 +318,7 @@ def test_members_with_terminal_events_take_the_steps_of_run_in_lanes(scene, memb
         np.testing.assert_allclose(result.final_state[i], expected, rtol=1e-12, atol=1e-13)
         for event, log in alone.events.items():
             assert result.events[event][i] == len(log)
-    from cayley_heyoka.sweep import layout_of, propagate_members
+    from cayley_heyoka.workflows.sweep import layout_of, propagate_members
 
     layout = layout_of(s)
     order = [2, 0, 1]
@@ -446,7 +446,7 @@ def test_dask_local_cluster_gives_the_local_arrays(body_sweep, tmp_path):
 
 def test_an_unreachable_scheduler_is_an_error_and_the_file_says_so(tmp_path, capsys, monkeypatch):
     pytest.importorskip("distributed")
-    from cayley_heyoka import sweep_dask
+    from cayley_heyoka.workflows import sweep_dask
 
     monkeypatch.setattr(sweep_dask, "CONNECT_TIMEOUT", 1)
     out = tmp_path / "lost.h5"
@@ -511,7 +511,7 @@ def test_scheduler_address_reaches_a_cluster_of_separate_processes(body_sweep, t
 def test_lane_columns_are_padded_in_their_widest_gap_or_refused():
     """A lane's column is padded (rectangular batch calls) with times strictly inside its widest
     gap, the last point kept last; a grid with no room is refused by name, not mangled."""
-    from cayley_heyoka.lanes import _padded
+    from cayley_heyoka.core.lanes import _padded
 
     points = np.array([0.0, 1e-300, 1.0, 2.0])
     padded = _padded(points, 8)
@@ -528,8 +528,8 @@ def test_a_cancel_stops_the_batch_calls_in_flight(scene):
     flight stay unfinished, instead of stepping on to t = 1e7 (hours: a hang)."""
     import threading
 
-    from cayley_heyoka import lanes
-    from cayley_heyoka.engine import model_of
+    from cayley_heyoka.core import lanes
+    from cayley_heyoka.core.engine import model_of
 
     data = {**scene, "output": {"times": {"start": "0", "stop": "1e7", "count": 3}}}
     member = ch.Scene.from_dict(data)

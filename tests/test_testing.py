@@ -17,7 +17,7 @@ from helpers import free_body
 
 import cayley_heyoka as ch
 from cayley_heyoka import Result, pytest_plugin
-from cayley_heyoka.files import seal
+from cayley_heyoka.core.files import seal
 from cayley_heyoka.testing import (
     DriftEnvelope,
     assert_drift_within,

@@ -74,7 +74,7 @@ from bench_common import available, fmt  # noqa: E402
 import cayley_heyoka as ch  # noqa: E402
 import cayley_heyoka.orbit.encke as encke_module  # noqa: E402
 import cayley_heyoka.orbit.model as orbit_model  # noqa: E402
-from cayley_heyoka.orbit.elements import Elements, elements_to_cartesian  # noqa: E402
+from cayley_heyoka.mechanics.kepler import Elements, elements_to_cartesian  # noqa: E402
 from cayley_heyoka.orbit.model import build_model  # noqa: E402
 
 LD = np.longdouble

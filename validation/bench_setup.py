@@ -10,7 +10,7 @@ Run:  python validation/bench_setup.py [--quick] [--out FILE]   (this section of
 2. Caches: a scene run again, a scene differing only in numbers, heyoka's in-memory and
    on-disk caches, new processes.
 3. Ensembles: members per second of a loop of ``run()``, of heyoka's batch mode and its
-   ensemble propagation, and of :func:`cayley_heyoka.ensemble.propagate_ensemble`.
+   ensemble propagation, and of :func:`cayley_heyoka.workflows.ensemble.propagate_ensemble`.
 
 "Cold" means that LLVM optimises and generates the code from scratch: our template cache and
 heyoka's in-memory cache are cleared and heyoka's disk cache points at a fresh, empty
@@ -38,9 +38,9 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka import engine, lanes
-from cayley_heyoka import ensemble as ens
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka.core import engine, lanes
+from cayley_heyoka.core.families import FAMILIES
+from cayley_heyoka.workflows import ensemble as ens
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -824,8 +824,9 @@ def run(quick: bool, figures: Path) -> str:
         "",
         f"Members per second and member-steps per second (double, tolerance ε) on {workers} "
         f"cores; heyoka's batch size is `recommended_simd_size()` = {simd}. *ours* is "
-        "`cayley_heyoka.ensemble.propagate_ensemble` (one compiled integrator per worker, "
-        "reused for every member; *batch, 1 thread* is heyoka's batch mode alone). heyoka's "
+        "`cayley_heyoka.workflows.ensemble.propagate_ensemble` (one compiled integrator per "
+        "worker, reused for every member; *batch, 1 thread* is heyoka's batch mode alone). "
+        "heyoka's "
         "`ensemble_propagate_until(_batch)` deep-copies the integrator for every member (or "
         "batch) it propagates. The `run()` loop builds, validates and runs one scene per "
         "member (template cache warm). *cores* is CPU seconds over wall seconds: what the "

@@ -33,8 +33,8 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka.engine import compile_model
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka.core.engine import compile_model
+from cayley_heyoka.core.families import FAMILIES
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

@@ -1,7 +1,7 @@
 """What watching for Ctrl-C costs a run: the same scenes run watched and unwatched, side by side.
 
 In the main thread the engine watches for SIGINT and SIGTERM so that a signal stops the run at
-a step's end with its results (``cayley_heyoka.engine``, "signals"): in double precision heyoka
+a step's end with its results (``cayley_heyoka.core.engine``, "signals"): in double precision heyoka
 steps in the engine's watch thread while the main thread waits, and a signal poisons the
 parameters; otherwise a Python callback runs after each step. In any other thread nothing is
 watched. This script runs each bundled scene both ways, interleaved (validation/users_common.py),

@@ -178,9 +178,9 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
     """
     import heyoka as hy
 
-    from cayley_heyoka.model import ParTable
-    from cayley_heyoka.orbit import elements as el
-    from cayley_heyoka.orbit import frames
+    from cayley_heyoka.core.model import ParTable
+    from cayley_heyoka.mechanics import frames
+    from cayley_heyoka.mechanics import kepler as el
     from cayley_heyoka.orbit.disturbing import Context, disturbing_function, gradient
     from cayley_heyoka.orbit.model import _plane_angles_at, initial_cartesian
 
@@ -269,7 +269,7 @@ def reference_job(name: str, formulation: str, precision: str, case: Any = None)
     """One formulation of R1–R4 at the cases' t; errors of every listed quantity.
 
     ``case`` replaces the named case (the tests pass a deliberately wrong scene)."""
-    from cayley_heyoka.orbit import elements as el
+    from cayley_heyoka.mechanics import kepler as el
     from cayley_heyoka.orbit.model import _plane_angles_at
 
     case = case or REFERENCE_BY_NAME[name]

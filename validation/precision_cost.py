@@ -17,9 +17,9 @@ from pathlib import Path
 import heyoka as hy
 
 import cayley_heyoka as ch
-from cayley_heyoka import engine
-from cayley_heyoka.precision import Precision
-from cayley_heyoka.scene import IntegratorOptions
+from cayley_heyoka.core import engine
+from cayley_heyoka.core.precision import Precision
+from cayley_heyoka.core.scene import IntegratorOptions
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "free_body.toml"
 

@@ -31,9 +31,9 @@ sys.path.insert(0, str(HERE))
 from users_common import Row, interleaved, table  # noqa: E402
 
 import cayley_heyoka as ch  # noqa: E402
-from cayley_heyoka import engine  # noqa: E402
-from cayley_heyoka.study import Study, load_study  # noqa: E402
-from cayley_heyoka.sweep import run_sweep  # noqa: E402
+from cayley_heyoka.core import engine  # noqa: E402
+from cayley_heyoka.workflows.study import Study, load_study  # noqa: E402
+from cayley_heyoka.workflows.sweep import run_sweep  # noqa: E402
 
 EXAMPLES = HERE.parent / "examples"
 

@@ -37,8 +37,8 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka.engine import compile_model
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka.core.engine import compile_model
+from cayley_heyoka.core.families import FAMILIES
 
 sys.path.insert(0, str(Path(__file__).parent))
 import bench_ias15  # noqa: E402

@@ -25,10 +25,10 @@ VERBS: tuple[str, ...] = ("run", "info", "check", "reference", "plot", "sweep")
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``cayley-heyoka`` console script.
 
-    What it prints goes through :class:`~cayley_heyoka.terminal.SafeStream` (text from files
+    What it prints goes through :class:`~cayley_heyoka.cli.terminal.SafeStream` (text from files
     cannot drive the terminal); output cut short by a closed pipe (``| head``) ends quietly.
     """
-    from ..terminal import SafeStream
+    from .terminal import SafeStream
 
     out, err = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = SafeStream(out), SafeStream(err, allow_cr=True)
@@ -65,7 +65,7 @@ def _interruptible() -> Iterator[None]:
 
 @contextlib.contextmanager
 def compiling() -> Iterator[None]:
-    """:func:`~cayley_heyoka.engine.signals_end_compilation` for a command that integrates.
+    """:func:`~cayley_heyoka.core.engine.signals_end_compilation` for a command that integrates.
 
     Entered by the command, not by :func:`main`: the engine imports heyoka, which the commands
     that do not integrate (and ``--help``) never load.
@@ -73,7 +73,7 @@ def compiling() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield  # the signals are the main thread's (and the engine's switch is process-wide)
         return
-    from ..engine import signals_end_compilation
+    from ..core.engine import signals_end_compilation
 
     with signals_end_compilation():
         yield
@@ -128,7 +128,7 @@ def destination(args: argparse.Namespace, kind: str) -> bool:
     """Refuse ``--out`` up front (printing why) if it cannot or may not be written."""
     if not args.out:
         return True
-    from ..files import OutputError, check_destination
+    from ..core.files import OutputError, check_destination
 
     try:
         check_destination(args.out, kind, overwrite=args.overwrite)

@@ -35,10 +35,10 @@ def command(args: argparse.Namespace) -> int:
 
 
 def _check(args: argparse.Namespace) -> int:
-    from ..checks import check_scene, parse_settings
-    from ..errors import IntegrationError
-    from ..files import OutputError
-    from ..scene import load_scene
+    from ..core.errors import IntegrationError
+    from ..core.files import OutputError
+    from ..core.scene import load_scene
+    from ..workflows.checks import check_scene, parse_settings
 
     if not destination(args, "check"):
         return 2

@@ -21,21 +21,21 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    from ..files import ResultFileError, identify
+    from ..core.files import ResultFileError, identify
 
     path = args.result
     try:
         kind = identify(path)
         if kind == "sweep":
-            from ..sweep_result import SweepResult
+            from ..workflows.sweep_result import SweepResult
 
             text = SweepResult.load(path).summary()
         elif kind == "check":
-            from ..checks import CheckReport
+            from ..workflows.checks import CheckReport
 
             text = CheckReport.load(path).text()
         else:  # a result, or whatever it is: the loader says what is wrong with it
-            from ..result import Result
+            from ..core.result import Result
             from .show import summary
 
             text = summary(Result.load(path))

@@ -1,5 +1,5 @@
 """``cayley-heyoka plot FILE --kind KIND [--out F.png]``: a result or sweep file as a PNG
-(:mod:`cayley_heyoka.plots`)."""
+(:mod:`cayley_heyoka.workflows.plots`)."""
 
 from __future__ import annotations
 
@@ -34,8 +34,8 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    from ..files import OutputError, ResultFileError, check_destination
-    from ..plots import PlotError, plot_file
+    from ..core.files import OutputError, ResultFileError, check_destination
+    from ..workflows.plots import PlotError, plot_file
 
     path = Path(args.file)
     try:

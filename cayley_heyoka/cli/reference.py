@@ -1,5 +1,5 @@
 """``cayley-heyoka reference SCENE.toml --digits N --out REF.h5``: a certified reference
-solution (:mod:`cayley_heyoka.reference_run`)."""
+solution (:mod:`cayley_heyoka.workflows.reference`)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Any
 from . import add_progress, compiling, show_progress
 
 if TYPE_CHECKING:
-    from ..precision import Precision
-    from ..scene import Scene
+    from ..core.precision import Precision
+    from ..core.scene import Scene
 
 # The workflow's defaults and choices, written here so that building the parser imports
 # nothing of it; tests/test_cli_imports.py holds them equal to reference_run's.
@@ -89,10 +89,10 @@ def command(args: argparse.Namespace) -> int:
 
 
 def _reference(args: argparse.Namespace) -> int:
-    from ..errors import SceneError
-    from ..files import WriteFailed
-    from ..reference_run import generate_reference, label
-    from ..scene import load_scene
+    from ..core.errors import SceneError
+    from ..core.files import WriteFailed
+    from ..core.scene import load_scene
+    from ..workflows.reference import generate_reference, label
 
     try:
         scene = load_scene(args.scene)
@@ -152,9 +152,9 @@ def _reference(args: argparse.Namespace) -> int:
 
 
 def _parse_precision(text: str | None) -> Precision | None:
-    """``--precision`` as a :class:`~cayley_heyoka.precision.Precision`, or None."""
-    from ..errors import SceneError
-    from ..precision import Precision
+    """``--precision`` as a :class:`~cayley_heyoka.core.precision.Precision`, or None."""
+    from ..core.errors import SceneError
+    from ..core.precision import Precision
 
     if text is None:
         return None
@@ -169,7 +169,7 @@ class _Bars:
     """One progress bar per run."""
 
     def __init__(self, scene: Scene) -> None:
-        from ..precision import Precision
+        from ..core.precision import Precision
 
         grid = scene.output.time_grid(Precision())
         self.t0, self.t1 = float(grid[0]), float(grid[-1])

@@ -27,9 +27,9 @@ def command(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..errors import IntegrationError, Interrupted, SceneError
-    from ..files import OutputError
-    from ..scene import load_scene
+    from ..core.errors import IntegrationError, Interrupted, SceneError
+    from ..core.files import OutputError
+    from ..core.scene import load_scene
     from .show import summary, time_bar
 
     if not destination(args, "result"):
@@ -39,7 +39,7 @@ def _run(args: argparse.Namespace) -> int:
     except SceneError as exc:
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
-    from ..engine import run  # heyoka: only once the scene is known to be good
+    from ..core.engine import run  # heyoka: only once the scene is known to be good
 
     bar = None
     if show_progress(args):

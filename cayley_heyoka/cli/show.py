@@ -6,7 +6,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..result import Result
+    from ..core.result import Result
 
 
 def time_bar(t0: float, t1: float, desc: str | None = None, file: Any = None) -> Any:

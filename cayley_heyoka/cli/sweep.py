@@ -1,5 +1,5 @@
 """``cayley-heyoka sweep STUDY.toml --out SWEEP.h5``: a conservation study
-(:mod:`cayley_heyoka.sweep`)."""
+(:mod:`cayley_heyoka.workflows.sweep`)."""
 
 from __future__ import annotations
 
@@ -43,9 +43,9 @@ def command(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from ..errors import SceneError
-    from ..files import OutputError, check_destination
-    from ..study import load_study
+    from ..core.errors import SceneError
+    from ..core.files import OutputError, check_destination
+    from ..workflows.study import load_study
 
     try:
         if args.out:
@@ -58,7 +58,7 @@ def _sweep(args: argparse.Namespace) -> int:
     except (SceneError, OSError) as exc:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
-    from ..sweep import run_sweep  # heyoka: only once the study is known to be good
+    from ..workflows.sweep import run_sweep  # heyoka: only once the study is known to be good
 
     bar = None
     if show_progress(args):

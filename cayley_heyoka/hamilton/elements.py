@@ -25,7 +25,7 @@ from collections.abc import Sequence
 import heyoka as hy
 import numpy as np
 
-from ..errors import SceneError
+from ..core.errors import SceneError
 
 Expr = hy.expression
 

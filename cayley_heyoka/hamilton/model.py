@@ -17,18 +17,18 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from ..errors import SceneError
-from ..expressions import parse_expression
-from ..model import EventSpec, Model, ParTable
-from ..precision import exact_fraction, fraction_text
-from ..scene import Scene
+from ..core.errors import SceneError
+from ..core.expressions import parse_expression
+from ..core.model import EventSpec, Model, ParTable
+from ..core.precision import exact_fraction, fraction_text
+from ..core.scene import Scene
 from .canonical import canonical_equations, principal_rate
 from .elements import check_flow, compose, element_equations
 from .scene import Hamiltonian
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated Hamiltonian scene into a :class:`~cayley_heyoka.model.Model`."""
+    """Turn a validated Hamiltonian scene into a :class:`~cayley_heyoka.core.model.Model`."""
     ham: Hamiltonian = scene.model
     if ham.model == "predominant_mass":
         from .planets_model import build_model as build_predominant_mass

@@ -34,7 +34,7 @@ velocity (1 + m/M) x′) and n = √(K/a³). Their brackets are the unit ones (�
 {μ, τ} = {ϖ, λ} = {χ, ν} = 1 in Hamilton's velocity brackets, so (μ, mτ), (ϖ, mλ), (χ, mν)
 are canonical pairs with respect to (ξ, p).
 
-**Numbers.** As in :mod:`cayley_heyoka.orbit.elements`: if any input is a ``str`` or an mpmath
+**Numbers.** As in :mod:`cayley_heyoka.mechanics.kepler`: if any input is a ``str`` or an mpmath
 number, every input is converted exactly and the result is computed in mpmath at the current
 ``mpmath.mp.dps``; otherwise in numpy doubles, arrays broadcast elementwise.
 
@@ -53,9 +53,9 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..orbit import elements as el
-from ..orbit.frames import cross, dot
-from ..reference.accuracy import to_mpf
+from ..core.accuracy import to_mpf
+from ..mechanics import kepler as el
+from ..mechanics.frames import cross, dot
 
 __all__ = [
     "HamiltonElements",

@@ -22,9 +22,9 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..checks import CheckReport, CheckRow
-from ..precision import exact_fraction
-from ..scene import Scene
+from ..core.precision import exact_fraction
+from ..core.scene import Scene
+from ..workflows.checks import CheckReport, CheckRow
 from . import planets
 
 
@@ -51,7 +51,7 @@ def check_formulations(scene: Scene) -> CheckReport:
         When a body cannot be given Hamilton's elements (circular, planar or unbound orbits),
         naming it.
     """
-    from ..engine import run
+    from ..core.engine import run
 
     if scene.family != "hamiltonian" or scene.model.model != "predominant_mass":
         raise ValueError("scene: needs model = 'predominant_mass'")

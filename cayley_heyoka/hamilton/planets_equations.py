@@ -27,9 +27,9 @@ from fractions import Fraction
 import heyoka as hy
 import mpmath
 
-from ..model import ParTable
-from ..orbit.frames import dot
-from ..precision import Number, Precision, exact_fraction, fraction_text
+from ..core.model import ParTable
+from ..core.precision import Number, Precision, exact_fraction, fraction_text
+from ..mechanics.frames import dot
 from .canonical import canonical_equations
 
 Expr = hy.expression
@@ -305,7 +305,7 @@ def element_system(
 
 def angular_momentum(xi: Sequence[Sequence[Expr]], p: Sequence[Sequence[Expr]]) -> list[Expr]:
     """Σ ξᵢ × pᵢ (conserved by (F2.): see :func:`.planets.angular_momentum`)."""
-    from ..orbit.frames import cross
+    from ..mechanics.frames import cross
 
     rows = [cross(list(x), list(q)) for x, q in zip(xi, p, strict=True)]
     return [hy.sum([r[j] for r in rows]) for j in range(3)]

@@ -18,10 +18,10 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
-from ..errors import SceneError
-from ..model import Model, ParTable
-from ..precision import Number, exact_fraction
-from ..scene import Scene
+from ..core.errors import SceneError
+from ..core.model import Model, ParTable
+from ..core.precision import Number, exact_fraction
+from ..core.scene import Scene
 from . import planets
 from . import planets_equations as pe
 from .model import _events, _principal_function, select_monitors
@@ -37,7 +37,7 @@ _AXES = ("x", "y", "z")
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated predominant-mass scene into a :class:`~cayley_heyoka.model.Model`."""
+    """Turn a validated predominant-mass scene into a :class:`~cayley_heyoka.core.model.Model`."""
     ham: Hamiltonian = scene.model
     prec = scene.integrator.precision
     n = len(ham.bodies)

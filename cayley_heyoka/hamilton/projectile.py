@@ -51,8 +51,8 @@ from dataclasses import dataclass, field
 
 import mpmath
 
-from ..reference.accuracy import Certified, certify, to_mpf
-from ..reference.inputs import check_dps, read_triple
+from ..core.accuracy import Certified, certify, to_mpf
+from ..core.inputs import check_dps, read_triple
 
 __all__ = ["PrincipalFunction", "ProjectileSolution", "principal_function", "projectile_solution"]
 

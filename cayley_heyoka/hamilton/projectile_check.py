@@ -20,8 +20,14 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..checks import CheckOptions, CheckReport, CheckRow, flow_sensitivity, round_off_scale
-from ..scene import Scene
+from ..core.scene import Scene
+from ..workflows.checks import (
+    CheckOptions,
+    CheckReport,
+    CheckRow,
+    flow_sensitivity,
+    round_off_scale,
+)
 
 __all__ = ["check_hamiltonian", "check_projectile"]
 
@@ -68,8 +74,8 @@ def check_projectile(scene: Scene) -> CheckReport:
         over each of η₀ᵢ moved by δ max|η| and ϖ₀ᵢ by δ max|ϖ| (and, for S, S₀ by δ max|S|),
         measured on the closed form at 16 times over the span.
     """
-    from ..engine import run
-    from ..reference_run import closed_form_for
+    from ..core.engine import run
+    from ..workflows.reference import closed_form_for
 
     if scene.model.model != "projectile":
         raise ValueError("scene: needs model = 'projectile'")

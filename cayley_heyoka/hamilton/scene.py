@@ -23,13 +23,13 @@ from typing import Any
 
 import mpmath
 
-from ..errors import SceneError
-from ..expressions import uses_time
-from ..orbit.elements import Elements
-from ..orbit.frames import cross, dot
+from ..core.errors import SceneError
+from ..core.expressions import uses_time
+from ..core.precision import Number, exact_fraction, exceeds_pi
+from ..core.scene import check_keys, number, vector
+from ..mechanics.frames import cross, dot
+from ..mechanics.kepler import Elements
 from ..orbit.scene import ELEMENT_KEYS
-from ..precision import Number, exact_fraction, exceeds_pi
-from ..scene import check_keys, number, vector
 from . import planets
 
 MODELS = ("projectile", "predominant_mass")

@@ -23,9 +23,15 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..checks import CheckOptions, CheckReport, CheckRow, flow_sensitivity, round_off_scale
-from ..scene import Scene
-from . import elements as el
+from ..core.scene import Scene
+from ..mechanics import kepler as el
+from ..workflows.checks import (
+    CheckOptions,
+    CheckReport,
+    CheckRow,
+    flow_sensitivity,
+    round_off_scale,
+)
 from .scene import FORMULATIONS
 
 __all__ = ["TWINS", "check_orbit", "check_twin"]
@@ -71,8 +77,8 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
         When the twin is the scene's own formulation, or the orbit is not an ellipse (the
         bound's sensitivity is the Kepler ellipse's).
     """
-    from ..engine import run
-    from ..reference_run import label, next_precision
+    from ..core.engine import run
+    from ..workflows.reference import label, next_precision
 
     orbit = scene.model
     twin = twin or ("precision" if orbit.formulation == "cartesian" else "cartesian")

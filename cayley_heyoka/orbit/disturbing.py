@@ -35,12 +35,12 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
-from ..errors import SceneError
-from ..expressions import parse_expression, uses_time
-from ..model import ParTable
-from ..precision import Number, exact_fraction, exceeds_pi
-from ..scene import check_keys, number, vector
-from . import frames
+from ..core.errors import SceneError
+from ..core.expressions import parse_expression, uses_time
+from ..core.model import ParTable
+from ..core.precision import Number, exact_fraction, exceeds_pi
+from ..core.scene import check_keys, number, vector
+from ..mechanics import frames
 
 Expr = hy.expression
 _MAX_DEGREE = 40

@@ -61,9 +61,9 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
-from ..model import ParTable
-from ..precision import Precision
-from . import frames
+from ..core.model import ParTable
+from ..core.precision import Precision
+from ..mechanics import frames
 
 Expr = Any  # a heyoka expression
 STATE = ("dx", "dy", "dz", "dvx", "dvy", "dvz", "psi")

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import heyoka as hy
 
-from . import frames
+from ..mechanics import frames
 from .disturbing import Gradient
 
 Expr = hy.expression

@@ -22,14 +22,14 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
-from ..errors import SceneError
-from ..expressions import parse_expression
-from ..model import EventSpec, Model, ParTable, TerminalSpec
-from ..precision import exact_fraction
-from ..scene import Scene
-from . import elements as el
+from ..core.errors import SceneError
+from ..core.expressions import parse_expression
+from ..core.model import EventSpec, Model, ParTable, TerminalSpec
+from ..core.precision import exact_fraction
+from ..core.scene import Scene
+from ..mechanics import frames
+from ..mechanics import kepler as el
 from . import equations as eq
-from . import frames
 from .disturbing import Context, Gradient, force, term_functions
 from .encke import STATE as ENCKE
 from .encke import Encke
@@ -44,7 +44,7 @@ _GUARD_DIGITS = 15
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated orbit scene into a :class:`~cayley_heyoka.model.Model`."""
+    """Turn a validated orbit scene into a :class:`~cayley_heyoka.core.model.Model`."""
     orbit: Orbit = scene.model
     prec = scene.integrator.precision
     pars = ParTable(prec)

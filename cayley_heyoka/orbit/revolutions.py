@@ -29,8 +29,8 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
-from ..model import ParTable
-from ..precision import Precision
+from ..core.model import ParTable
+from ..core.precision import Precision
 
 Expr = Any  # a heyoka expression
 

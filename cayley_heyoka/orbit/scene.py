@@ -6,9 +6,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import SceneError
-from ..precision import Number, exact_fraction, exceeds_pi
-from ..scene import check_keys, number, vector
+from ..core.errors import SceneError
+from ..core.precision import Number, exact_fraction, exceeds_pi
+from ..core.scene import check_keys, number, vector
 from .disturbing import ThirdBody, Zonal, parse_perturbations
 
 FORMULATIONS = ("cayley", "quaternion", "cartesian", "encke")

@@ -18,7 +18,7 @@ from __future__ import annotations
 from importlib import import_module
 from typing import Any
 
-from .accuracy import PrecisionNotReached
+from ..core.accuracy import PrecisionNotReached
 
 # The solutions live beside the equations they solve (rotation/, later orbit/, hamilton/) and
 # import .accuracy from here, so they are loaded on first use rather than at import time.

@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 
 import mpmath
 
-from ..reference.accuracy import PrecisionNotReached, certify, to_mpf
-from ..reference.inputs import check_dps, read_inertia, read_rates, read_triple
+from ..core.accuracy import PrecisionNotReached, certify, to_mpf
+from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from .attitude import matvec, rodrigues_to_matrix
 from .euler1758 import (
     GUARD,

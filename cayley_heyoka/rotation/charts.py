@@ -23,8 +23,8 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..model import ParTable
-from ..precision import Precision
+from ..core.model import ParTable
+from ..core.precision import Precision
 from . import attitude as att
 
 

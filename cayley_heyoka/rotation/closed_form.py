@@ -33,8 +33,8 @@ from typing import Literal
 
 import mpmath
 
-from ..reference.accuracy import Certified, PrecisionNotReached, certify, to_mpf
-from ..reference.inputs import check_dps, read_inertia, read_rates, read_triple
+from ..core.accuracy import Certified, PrecisionNotReached, certify, to_mpf
+from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from .attitude import (
     quaternion_multiply,
     quaternion_to_matrix,

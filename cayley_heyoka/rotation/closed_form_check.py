@@ -3,14 +3,14 @@
 A torque-free body is run and compared, at its output times and invariable-plane crossings,
 with Cayley's 1843 solution (:class:`~cayley_heyoka.reference.FreeRigidBody`, docs/reference.md)
 through the closed-form certificate of ``cayley-heyoka reference``
-(:func:`cayley_heyoka.reference_run.closed_form_for`). A forced body has no closed form: its
+(:func:`cayley_heyoka.workflows.reference.closed_form_for`). A forced body has no closed form: its
 check is Cayley's 1846 element equations (:mod:`.element_check`).
 
 The bound of each row is fixed before the run by Brouwer's round-off law: N steps each round
 the state by about ε, the errors add like a random walk, and the flow carries each to the
 output times multiplied by at most its sensitivity to the initial state, measured on the
-closed form itself (:func:`~cayley_heyoka.checks.flow_sensitivity`). So the bound is
-``10 ε √N × sensitivity`` (:func:`~cayley_heyoka.checks.round_off_scale`); the sensitivity
+closed form itself (:func:`~cayley_heyoka.workflows.checks.flow_sensitivity`). So the bound is
+``10 ε √N × sensitivity`` (:func:`~cayley_heyoka.workflows.checks.round_off_scale`); the sensitivity
 grows with the span (the period depends on the invariants, so the phase walks), and near the
 separatrix with the period's dependence on them.
 """
@@ -24,9 +24,15 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..checks import CheckOptions, CheckReport, CheckRow, flow_sensitivity, round_off_scale
-from ..precision import exact_fraction
-from ..scene import Scene
+from ..core.precision import exact_fraction
+from ..core.scene import Scene
+from ..workflows.checks import (
+    CheckOptions,
+    CheckReport,
+    CheckRow,
+    flow_sensitivity,
+    round_off_scale,
+)
 from .attitude import quaternion_multiply
 
 __all__ = ["check_closed_form", "check_rotation", "check_twin"]
@@ -116,8 +122,8 @@ def check_closed_form(scene: Scene, times: int | None = None) -> CheckReport:
       rates' bound over |dω_i/dt| there, which the invariants fix (the least over the axes),
       plus 10 ε max(1, t) for the event's root.
     """
-    from ..engine import run
-    from ..reference_run import closed_form_for
+    from ..core.engine import run
+    from ..workflows.reference import closed_form_for
 
     if not scene.model.torque_free:
         raise ValueError("scene: the closed form is that of a torque-free body; it has forces")
@@ -249,8 +255,8 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
         exponentially, and so does the bound: the check then says that the run is as accurate
         as the motion's conditioning allows.
     """
-    from ..engine import run
-    from ..reference_run import difference_certificate
+    from ..core.engine import run
+    from ..workflows.reference import difference_certificate
 
     body = scene.model
     if body.formulation not in ("rodrigues", "quaternion"):
@@ -288,8 +294,8 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     factor needs no more)."""
     import heyoka as hy
 
-    from ..families import FAMILIES
-    from ..precision import Precision
+    from ..core.families import FAMILIES
+    from ..core.precision import Precision
 
     data = scene.to_dict()
     data.setdefault("attitude", {})["formulation"] = "quaternion"
@@ -339,7 +345,7 @@ def _thinned(result: Any, count: int | None) -> Any:
 def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     """Sensitivities of the rates and the quaternion to the initial state (see the Notes of
     :func:`check_closed_form`), from the closed form at :data:`_SENSITIVITY_DPS` digits."""
-    from ..precision import Precision
+    from ..core.precision import Precision
     from .closed_form import FreeRigidBody
 
     body = scene.model

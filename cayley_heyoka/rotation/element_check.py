@@ -18,11 +18,11 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
-from ..checks import CheckReport, CheckRow
-from ..errors import SceneError
-from ..model import ParTable
-from ..precision import Precision
-from ..scene import Scene
+from ..core.errors import SceneError
+from ..core.model import ParTable
+from ..core.precision import Precision
+from ..core.scene import Scene
+from ..workflows.checks import CheckReport, CheckRow
 from . import attitude as att
 from . import equations as eq
 from .model import force_function, rodrigues_of_matrix
@@ -160,7 +160,7 @@ def check_element_equations(
 ) -> CheckReport:
     """Check Cayley's element equations (62)–(63) along a forced run of a rotation scene.
 
-    The scene is run (:func:`cayley_heyoka.engine.run`, in its own precision) over its output
+    The scene is run (:func:`cayley_heyoka.core.engine.run`, in its own precision) over its output
     span on a grid of ``samples`` intervals with ``nodes`` Gauss–Legendre nodes each. At every
     recorded state x the elements c and their Jacobian J (in the body-rotation coordinates
     x = (φ, ω) of :meth:`CayleyElements.jacobian`) are computed in the same precision,
@@ -276,7 +276,7 @@ def check_element_equations(
     data = scene.to_dict()
     data.pop("events", None)
     data["output"] = {"times": texts}
-    from ..engine import run
+    from ..core.engine import run
 
     result = run(Scene.from_dict(data))
     samples_data = _sample_along(result, inertia, upsilon0, forces, prec)

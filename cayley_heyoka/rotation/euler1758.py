@@ -36,8 +36,8 @@ from typing import NamedTuple
 
 import mpmath
 
-from ..reference.accuracy import PrecisionNotReached, certify, to_mpf
-from ..reference.inputs import check_dps, read_inertia, read_rates, read_triple
+from ..core.accuracy import PrecisionNotReached, certify, to_mpf
+from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 
 __all__ = [
     "Euler1758",

@@ -14,11 +14,11 @@ from typing import Any
 
 import heyoka as hy
 
-from ..errors import SceneError
-from ..expressions import parse_expression, uses_time
-from ..model import ParTable
-from ..precision import normalised
-from ..scene import check_keys, number, unit_vector, vector
+from ..core.errors import SceneError
+from ..core.expressions import parse_expression, uses_time
+from ..core.model import ParTable
+from ..core.precision import normalised
+from ..core.scene import check_keys, number, unit_vector, vector
 from .attitude import Matrix
 
 Expr = hy.expression

@@ -17,11 +17,11 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from ..errors import SceneError
-from ..expressions import parse_expression
-from ..model import EventSpec, Model, ParTable, TerminalSpec
-from ..precision import exact_fraction, fraction_text
-from ..scene import Scene
+from ..core.errors import SceneError
+from ..core.expressions import parse_expression
+from ..core.model import EventSpec, Model, ParTable, TerminalSpec
+from ..core.precision import exact_fraction, fraction_text
+from ..core.scene import Scene
 from . import attitude as att
 from . import equations as eq
 from .charts import RodriguesAtlas, kappa_limit
@@ -34,7 +34,7 @@ MONITORS = ("energy", "momentum_squared", "momentum_space", "momentum_vertical",
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated rigid-body scene into a :class:`~cayley_heyoka.model.Model`."""
+    """Turn a validated rigid-body scene into a :class:`~cayley_heyoka.core.model.Model`."""
     body: RigidBody = scene.model
     prec = scene.integrator.precision
     pars = ParTable(prec)

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import SceneError
-from ..precision import Number, Precision, exact_fraction, unit_length
-from ..scene import check_keys, number, vector
+from ..core.errors import SceneError
+from ..core.precision import Number, Precision, exact_fraction, unit_length
+from ..core.scene import check_keys, number, vector
 from . import attitude as att
 from .forces import parse_forces
 

@@ -48,8 +48,8 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
-from ..checks import CheckReport, CheckRow
-from ..precision import Precision
+from ..core.precision import Precision
+from ..workflows.checks import CheckReport, CheckRow
 from . import attitude as att
 
 __all__ = [

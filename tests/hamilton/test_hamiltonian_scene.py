@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Scene, SceneError, run
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka.core.families import FAMILIES
 
 # (g, mu, nu, t, e, p) and (eta(t), varpi(t), S) of cases R1–R4.
 CASES = {

@@ -31,7 +31,7 @@ from cayley_heyoka.hamilton import planets
 from cayley_heyoka.hamilton import planets_equations as pe
 from cayley_heyoka.hamilton.elements import lagrange_brackets
 from cayley_heyoka.hamilton.scene import MAX_BODIES
-from cayley_heyoka.orbit.elements import Elements
+from cayley_heyoka.mechanics.kepler import Elements
 
 EPS = 2.0**-52
 EPS_QUAD = 2.0**-112
@@ -518,7 +518,7 @@ def test_elements_and_canonical_agree_over_a_thousand_orbits():
 def test_the_element_equations_compile_in_compact_mode_by_default():
     """Their non-compact code takes ~25 s to compile for two bodies (~1 s compact); two bodies'
     canonical equations are small and step faster without it."""
-    from cayley_heyoka.families import FAMILIES
+    from cayley_heyoka.core.families import FAMILIES
 
     build = FAMILIES["hamiltonian"].build
     assert build(Scene.from_dict(n5("elements", stop="1"))).compact

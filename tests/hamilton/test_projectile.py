@@ -14,13 +14,13 @@ import math
 import mpmath
 import pytest
 
+from cayley_heyoka.core.accuracy import scaled_difference
 from cayley_heyoka.hamilton.projectile import (
     PrincipalFunction,
     ProjectileSolution,
     principal_function,
     projectile_solution,
 )
-from cayley_heyoka.reference.accuracy import scaled_difference
 
 CASES = {
     "R1": {

@@ -3,7 +3,7 @@
 Every case ends as the runner requires (tests/hostile/conftest.py): refused with an
 ``error: FILE: ...`` line, or done — and a file that is read without complaint holds exactly
 what was written. Nothing given as ``--out`` is replaced unless it is ours of the same kind or
-``--overwrite`` is given. The policy: cayley_heyoka/files.py, docs/scenes.md ("Files").
+``--overwrite`` is given. The policy: cayley_heyoka/core/files.py, docs/scenes.md ("Files").
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Result, Scene, run
-from cayley_heyoka.checks import CheckReport
-from cayley_heyoka.files import DIGEST, seal
-from cayley_heyoka.reference_run import WORK_MARKER
-from cayley_heyoka.sweep_result import load_sweep
+from cayley_heyoka.core.files import DIGEST, seal
+from cayley_heyoka.workflows.checks import CheckReport
+from cayley_heyoka.workflows.reference import WORK_MARKER
+from cayley_heyoka.workflows.sweep_result import load_sweep
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "files"

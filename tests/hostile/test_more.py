@@ -16,7 +16,7 @@ from test_scenes import small
 
 import cayley_heyoka as ch
 from cayley_heyoka import load_result
-from cayley_heyoka.errors import IntegrationError, SceneError
+from cayley_heyoka.core.errors import IntegrationError, SceneError
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 VERBS = ["run", "check", "reference", "sweep", "info", "plot"]

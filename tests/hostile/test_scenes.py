@@ -19,7 +19,7 @@ import pytest
 from conftest import Raw, toml
 
 from cayley_heyoka import load_result
-from cayley_heyoka import scene as scene_module
+from cayley_heyoka.core import scene as scene_module
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 NAMES = sorted(p.stem for p in EXAMPLES.glob("*.toml"))

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from numpy.polynomial import legendre
 
-from cayley_heyoka.model import ParTable
+from cayley_heyoka.core.model import ParTable
+from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.orbit.disturbing import Context, ThirdBody, Zonal, gradient
-from cayley_heyoka.precision import Precision
 
 MU = 1.3
 X = np.array([[0.9, 0.2, 0.1], [-0.3, 1.1, -0.6], [0.05, -0.4, 1.7]])

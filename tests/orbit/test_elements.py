@@ -22,8 +22,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cayley_heyoka.orbit import frames
-from cayley_heyoka.orbit.elements import (
+from cayley_heyoka.mechanics import frames
+from cayley_heyoka.mechanics.kepler import (
     CayleyState,
     Elements,
     cartesian_to_cayley,

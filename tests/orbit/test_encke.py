@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import IntegrationError, Scene, SceneError, run
-from cayley_heyoka.orbit.elements import Elements, elements_to_cartesian
+from cayley_heyoka.mechanics.kepler import Elements, elements_to_cartesian
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
 import orbit_cases  # noqa: E402

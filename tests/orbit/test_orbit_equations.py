@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Scene
-from cayley_heyoka.families import FAMILIES
-from cayley_heyoka.model import ParTable
-from cayley_heyoka.orbit import frames
+from cayley_heyoka.core.families import FAMILIES
+from cayley_heyoka.core.model import ParTable
+from cayley_heyoka.mechanics import frames
 from cayley_heyoka.orbit.disturbing import Context, disturbing_function
 from cayley_heyoka.orbit.model import CAYLEY
 

@@ -32,7 +32,7 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import IntegrationError, Scene, load_result, run
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka.core.families import FAMILIES
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
 import orbit_cases  # noqa: E402

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Scene, SceneError
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka.core.families import FAMILIES
 
 
 def scene(**changes) -> dict:

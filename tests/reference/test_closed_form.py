@@ -9,8 +9,8 @@ from __future__ import annotations
 import mpmath
 import pytest
 
+from cayley_heyoka.core.accuracy import certify
 from cayley_heyoka.reference import FreeRigidBody, PrecisionNotReached, free_rigid_body
-from cayley_heyoka.reference.accuracy import certify
 from cayley_heyoka.rotation.attitude import quaternion_to_matrix
 
 CASES = {

@@ -5,7 +5,7 @@ from __future__ import annotations
 import mpmath
 import pytest
 
-from cayley_heyoka.reference.accuracy import scaled_difference
+from cayley_heyoka.core.accuracy import scaled_difference
 from cayley_heyoka.rotation.attitude import matvec, quaternion_to_matrix, rodrigues_to_matrix
 from cayley_heyoka.rotation.cayley1846 import Cayley1846
 from cayley_heyoka.rotation.euler1758 import Euler1758

@@ -14,8 +14,8 @@ import mpmath
 import numpy as np
 import pytest
 
-from cayley_heyoka.model import ParTable
-from cayley_heyoka.precision import Precision
+from cayley_heyoka.core.model import ParTable
+from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.rotation import attitude as att
 from cayley_heyoka.rotation.charts import RodriguesAtlas, kappa_limit
 

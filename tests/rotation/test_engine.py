@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from helpers import PRECISIONS, free_body
 
-from cayley_heyoka import IntegrationError, Result, Scene, engine, run
-from cayley_heyoka.families import FAMILIES
+from cayley_heyoka import IntegrationError, Result, Scene, run
+from cayley_heyoka.core import engine
+from cayley_heyoka.core.families import FAMILIES
 
 HEAVY_TOP = {"heavy_top": {"weight": "1", "center_of_mass": ["0.1", "-0.05", "0.3"]}}
 

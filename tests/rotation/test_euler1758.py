@@ -5,7 +5,7 @@ from __future__ import annotations
 import mpmath
 import pytest
 
-from cayley_heyoka.reference.accuracy import scaled_difference
+from cayley_heyoka.core.accuracy import scaled_difference
 from cayley_heyoka.rotation.euler1758 import Euler1758, ThetaPoint, quarter_sin_cos
 
 # Inputs (A, B, C; p, q, r; P in body axes; t) and outputs at t, from the reference note.

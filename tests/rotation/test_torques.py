@@ -6,7 +6,7 @@ import heyoka as hy
 import numpy as np
 import pytest
 
-from cayley_heyoka.model import ParTable
+from cayley_heyoka.core.model import ParTable
 from cayley_heyoka.rotation import attitude as att
 from cayley_heyoka.rotation import equations as eq
 from cayley_heyoka.rotation.forces import ForceContext, GravityGradient, HeavyTop, Potential

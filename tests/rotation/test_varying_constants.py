@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import cayley_heyoka as ch
-from cayley_heyoka.errors import SceneError
+from cayley_heyoka.core.errors import SceneError
 from cayley_heyoka.rotation import element_check as ec
 from cayley_heyoka.rotation import varying_constants as vc
 from cayley_heyoka.rotation.cayley1846 import Cayley1846

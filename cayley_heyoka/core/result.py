@@ -139,7 +139,7 @@ class Result:
         """Write the result to an HDF5 file (layout: ``docs/scenes.md``, "Files").
 
         The file is written under a temporary name and renamed into place, with a checksum
-        of its contents (:mod:`cayley_heyoka.files`): a previous file at ``path`` is replaced
+        of its contents (:mod:`cayley_heyoka.core.files`): a previous file at ``path`` is replaced
         whole or not at all.
 
         Raises

@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SceneError
-from .precision import Number, Precision, exact_fraction, fraction_text
-from .scene import Scene, _plain, check_keys, number, read_toml
+from ..core.errors import SceneError
+from ..core.precision import Number, Precision, exact_fraction, fraction_text
+from ..core.scene import Scene, _plain, check_keys, number, read_toml
 
 KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")

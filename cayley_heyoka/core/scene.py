@@ -49,7 +49,7 @@ MAX_MAX_STEPS = 10**18
 #: The smallest tolerance accepted, as a fraction of the precision's epsilon.
 TOLERANCE_FLOOR = Fraction(1, 10**6)
 #: Output times at most (10⁷ rows of a 20-number model are 1.6 GB in double); the engine also
-#: bounds the recorded rows' estimated memory (:data:`cayley_heyoka.engine.MAX_RECORD_BYTES`).
+#: bounds the recorded rows' estimated memory (:data:`cayley_heyoka.core.engine.MAX_RECORD_BYTES`).
 MAX_OUTPUT_TIMES = 10**7
 #: Largest scene file read (a list of 10⁷ output times as text is ~200 MB; nothing else is big).
 MAX_SCENE_BYTES = 256 * 2**20
@@ -94,7 +94,7 @@ def vector(value: Any, where: str, length: int) -> tuple[Number, ...]:
 
 def unit_vector(value: Any, where: str) -> tuple[Number, ...]:
     """A 3-vector of unit length to 1e-12 (a guard against typos, not a rescaling: the model
-    normalises it in the run's precision, :func:`cayley_heyoka.precision.normalised`)."""
+    normalises it in the run's precision, :func:`cayley_heyoka.core.precision.normalised`)."""
     v = vector(value, where, 3)
     unit, norm = unit_length(v, Fraction(1, 10**12))
     if not unit:

@@ -13,7 +13,7 @@ differently) and do not depend on the other members, their order, the lanes or t
 * heyoka chooses each lane's steps from that lane's Taylor coefficients alone;
 * a lane's trajectory depends on where its ``propagate_grid`` calls end (a call's last point
   ends a step there), so each lane keeps the scalar engine's schedule of calls
-  (:class:`cayley_heyoka.engine.Propagation`): one call over the whole grid, terminal events
+  (:class:`cayley_heyoka.core.engine.Propagation`): one call over the whole grid, terminal events
   handled inside it. A terminal event's handler acts on a view of its lane
   (:class:`_LaneView`) and the member's own parameters, as on a scalar integrator;
 * members usually run a batch at a time in that one call; a batch in which a lane stops short
@@ -320,7 +320,7 @@ class _LaneRecorder:
 
 class Cancel(threading.Event):
     """A cancel flag that also stops the batch calls in flight, as the engine's watch stops a
-    scalar run (:class:`cayley_heyoka.engine._Watch`): :meth:`set` makes the parameters of the
+    scalar run (:class:`cayley_heyoka.core.engine._Watch`): :meth:`set` makes the parameters of the
     integrators stepping non-finite, so heyoka returns after its current step instead of at
     the end of a call that may cover a member's whole span. What those calls computed is
     dropped (their members are not finished)."""
@@ -389,7 +389,7 @@ class _Member:
 
     ``rows`` are the output times the lane's current call may record and ``rows_pars`` the
     parameter vectors of the first of them, those passed before a terminal handler changed
-    the parameters (as in :meth:`cayley_heyoka.engine.Propagation._on_terminal`).
+    the parameters (as in :meth:`cayley_heyoka.core.engine.Propagation._on_terminal`).
     """
 
     index: int
@@ -610,7 +610,7 @@ class _Lanes:
 
     def _collect(self, j: int, column: tuple[np.ndarray, int], length: int, out, res) -> None:
         """Record lane ``j``'s rows of the call and act on its outcome, as
-        :meth:`cayley_heyoka.engine.Propagation._propagate` does on a scalar integrator."""
+        :meth:`cayley_heyoka.core.engine.Propagation._propagate` does on a scalar integrator."""
         ta, m = self.ta, self.lanes[j]
         points, lead = column
         outcome, steps = res[0], int(res[3])

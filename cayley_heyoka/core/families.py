@@ -36,8 +36,8 @@ def _later(module: str, name: str) -> Callable[[Any, Any], Any]:
 
 
 def _rotation() -> Family:
-    from .rotation.model import build_model
-    from .rotation.scene import RigidBody
+    from ..rotation.model import build_model
+    from ..rotation.scene import RigidBody
 
     return Family(
         "rotation",
@@ -45,13 +45,13 @@ def _rotation() -> Family:
         ("body", "initial", "attitude", "forces"),
         RigidBody.parse,
         build_model,
-        consistency_check=_later(".rotation.closed_form_check", "check_rotation"),
+        consistency_check=_later("..rotation.closed_form_check", "check_rotation"),
     )
 
 
 def _orbit() -> Family:
-    from .orbit.model import build_model, check
-    from .orbit.scene import Orbit
+    from ..orbit.model import build_model, check
+    from ..orbit.scene import Orbit
 
     tables = ("orbit", "perturbations", "reference_plane")
     return Family(
@@ -61,13 +61,13 @@ def _orbit() -> Family:
         Orbit.parse,
         build_model,
         check,
-        consistency_check=_later(".orbit.cartesian_check", "check_orbit"),
+        consistency_check=_later("..orbit.cartesian_check", "check_orbit"),
     )
 
 
 def _hamiltonian() -> Family:
-    from .hamilton.model import build_model
-    from .hamilton.scene import Hamiltonian
+    from ..hamilton.model import build_model
+    from ..hamilton.scene import Hamiltonian
 
     tables = ("hamiltonian", "initial")
     return Family(
@@ -77,7 +77,7 @@ def _hamiltonian() -> Family:
         Hamiltonian.parse,
         build_model,
         output_keys=("principal_function",),
-        consistency_check=_later(".hamilton.projectile_check", "check_hamiltonian"),
+        consistency_check=_later("..hamilton.projectile_check", "check_hamiltonian"),
     )
 
 

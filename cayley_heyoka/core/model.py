@@ -100,7 +100,7 @@ class TerminalSpec:
 
     A handler that keeps state of its own between calls (not in ``pars``) exposes it as
     ``checkpoint() -> JSON value`` and ``resume(value)``, so that an interrupted run continues
-    exactly (:meth:`cayley_heyoka.engine.Propagation.snapshot`).
+    exactly (:meth:`cayley_heyoka.core.engine.Propagation.snapshot`).
     """
 
     expression: Expr

@@ -248,7 +248,7 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
     Parameters
     ----------
     scene
-        A validated :class:`~cayley_heyoka.scene.Scene`.
+        A validated :class:`~cayley_heyoka.core.scene.Scene`.
     progress
         Called with the current time after each step (slows stepping; for progress bars).
 

@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SceneError
-from .scene import Scene
+from ..core.errors import SceneError
+from ..core.scene import Scene
 
 
 @dataclass(frozen=True)
@@ -85,7 +85,7 @@ class CheckReport:
     def save(self, path: str | Path) -> None:
         """Write the rows and series to an HDF5 file (atomically, with a checksum, as
         :meth:`Result.save <cayley_heyoka.Result.save>`)."""
-        from .files import FORMAT_VERSION, FORMATS, write_hdf5
+        from ..core.files import FORMAT_VERSION, FORMATS, write_hdf5
 
         def fill(f: Any) -> None:
             f.attrs["format"] = FORMATS["check"]
@@ -108,7 +108,7 @@ class CheckReport:
     @classmethod
     def load(cls, path: str | Path) -> CheckReport:
         """Read a check file written by :meth:`save` (``ResultFileError`` if it is damaged)."""
-        from .files import open_ours
+        from ..core.files import open_ours
 
         with open_ours(path, "check") as f:
             rows = tuple(
@@ -191,7 +191,7 @@ def round_off_scale(steps: int, epsilon: float, tolerance: float | None = None) 
 def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckReport:
     """Run the consistency check of ``scene``'s family.
 
-    Each family names its check in the registry (:attr:`cayley_heyoka.families.Family.
+    Each family names its check in the registry (:attr:`cayley_heyoka.core.families.Family.
     consistency_check`); the checks, by family, are listed in docs/scenes.md ("Consistency
     checks").
 
@@ -209,8 +209,8 @@ def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckRepor
     ValueError
         When the check cannot be carried through, naming the reason.
     """
-    from .engine import preflight
-    from .families import FAMILIES
+    from ..core.engine import preflight
+    from ..core.families import FAMILIES
 
     check = FAMILIES[scene.family].consistency_check
     if check is None:

@@ -39,9 +39,9 @@ from typing import Any
 
 import numpy as np
 
-from .errors import IntegrationError
-from .precision import Precision
-from .scene import Scene
+from ..core.errors import IntegrationError
+from ..core.precision import Precision
+from ..core.scene import Scene
 from .study import (
     DEFAULT_CHUNK,
     Member,
@@ -78,7 +78,7 @@ Progress = Callable[[int, int], None]
 # ---------------------------------------------------------------------- running
 def layout_of(study: Study) -> Layout:
     """The file's columns, from the first member's model."""
-    from .families import FAMILIES
+    from ..core.families import FAMILIES
 
     scene = study.member_scene(0, study.members()[0])
     model = FAMILIES[scene.family].build(scene)
@@ -175,7 +175,7 @@ def run_sweep(
         stopped = f"{type(exc).__name__}: {exc}"
         raise
     finally:
-        from .result import versions
+        from ..core.result import versions
 
         result.metadata = {
             **versions(),
@@ -238,7 +238,7 @@ def prepare_members(
 ) -> Prepared:
     """The first half of :func:`propagate_members`: each member's scene and model, grouped by
     compiled structure (Python work, run while the previous chunk integrates)."""
-    from .families import FAMILIES
+    from ..core.families import FAMILIES
 
     prec = study.precision
     n = len(members)
@@ -310,7 +310,7 @@ def _pipeline(
     members stay NOT_RUN) within a step (:class:`.lanes.Cancel`)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from . import lanes
+    from ..core import lanes
 
     prec = study.precision
     cancel = lanes.Cancel()
@@ -336,7 +336,7 @@ def _split(items: list, size: int) -> Iterator[list]:
 
 
 def _group_key(model: Any, scene: Scene) -> str:
-    from .engine import cache_key
+    from ..core.engine import cache_key
 
     # A step cap and the step budget are runtime arguments shared by one batch call.
     options = scene.integrator
@@ -357,7 +357,7 @@ def _record(
     complete: bool,
 ) -> None:
     """Fill one member's drifts and final values from its outputs and monitors."""
-    from .result import Result
+    from ..core.result import Result
 
     reached = len(next(iter(values.values()))) if values else 0
     monitors = {k: values[k] for k in layout.drift if k in values}
@@ -387,7 +387,7 @@ def _run_group(
     """Members whose scenes have terminal events: one ``engine.run`` each."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from . import engine
+    from ..core import engine
 
     _, scene0, model0 = group[0]
     compiled, cached = engine.compile_model(model0, scene0.integrator)  # once, before threads
@@ -426,7 +426,7 @@ def _lanes_group(
 ) -> None:
     """Members sharing compiled code, in double: batch lanes (each member's own terminal-event
     handlers acting on its lane)."""
-    from . import engine, lanes
+    from ..core import engine, lanes
 
     _, scene0, model0 = group[0]
     compiled, cached = engine.compile_model(model0, scene0.integrator)  # the outputs' evaluator
@@ -480,7 +480,7 @@ def _ensemble_group(
     """Members sharing compiled code and without terminal events: heyoka's ensemble."""
     import heyoka as hy
 
-    from . import engine
+    from ..core import engine
 
     _, scene0, model0 = group[0]
     compiled, cached = engine.compile_model(model0, scene0.integrator)

@@ -9,7 +9,7 @@ certified route is taken:
   crossings) and Hamilton's projectile (:func:`~cayley_heyoka.reference.projectile_solution`):
   the closed form itself is the reference, evaluated at each output time in mpmath with its own
   certified error bound (two working precisions), in parallel over cores
-  (:mod:`cayley_heyoka.reference.evaluate`), and rounded once to the file's precision; the
+  (:mod:`cayley_heyoka.workflows.closed_form`), and rounded once to the file's precision; the
   certificate is that rounding, measured exactly, plus the bound. Nothing is integrated.
 * **Integration** (``method="integrate"``, or ``"auto"`` with a ``tolerance``, or
   ``"two-precisions"``), the independent check of the integrator and the only route where
@@ -28,13 +28,13 @@ Both routes escalate: if the certificate does not reach the requested digits (sc
 absolute where |x| ≤ 1, relative above), the precision is raised and the work repeated, up to
 ``max_bits``; past that the file is written marked uncertified and the command exits 1.
 
-Integrations go through :class:`~cayley_heyoka.checkpoint.CheckpointedRun` in a work
+Integrations go through :class:`~cayley_heyoka.workflows.checkpoint.CheckpointedRun` in a work
 directory beside the output (``REF.h5.work``): an interrupted command, run again, continues
 where it stopped and writes the same bits as an uninterrupted one. Once the file is written,
 the files the runs wrote there are removed (and the directory, if nothing else is in it); a
 ``OUT.work`` that this command did not make (it carries the marker file :data:`WORK_MARKER`)
 is refused, not touched. The closed-form route needs no work directory: it writes the file
-at the end, whole or not at all (:func:`cayley_heyoka.files.write_hdf5`). Either way the file
+at the end, whole or not at all (:func:`cayley_heyoka.core.files.write_hdf5`). Either way the file
 is an ordinary result file (``cayley_heyoka.load_result``) with a ``certificate`` group and
 the metadata needed to reproduce it (``metadata["reference"]``, whose ``method`` is
 ``"closed form"`` or ``"integration"``).
@@ -55,9 +55,9 @@ from typing import Any
 
 import numpy as np
 
-from .files import OutputError, check_destination, write_hdf5
-from .precision import Precision
-from .scene import Scene
+from ..core.files import OutputError, check_destination, write_hdf5
+from ..core.precision import Precision
+from ..core.scene import Scene
 
 #: Digits of working precision beyond those requested: room for the error a long run builds.
 GUARD_DIGITS = 4
@@ -179,14 +179,14 @@ def generate_reference(
     max_bits
         Give up raising the precision beyond this many bits.
     stretches
-        Checkpoints per run (see :class:`~cayley_heyoka.checkpoint.CheckpointedRun`).
+        Checkpoints per run (see :class:`~cayley_heyoka.workflows.checkpoint.CheckpointedRun`).
     workdir
         Where runs are checkpointed; default ``OUT.work`` beside ``out`` (integrations only).
     keep_work
         Keep the work directory after the file is written.
     overwrite
         Replace ``out`` even if it is not a result file of ours (see
-        :func:`cayley_heyoka.files.check_destination`).
+        :func:`cayley_heyoka.core.files.check_destination`).
     method
         ``"auto"`` (the closed form where there is one and no ``tolerance`` is given, else an
         integration), ``"closed-form"`` (evaluate it), ``"integrate"`` (integrate, certified
@@ -370,7 +370,7 @@ def _closed_form_reference(
     command: list[str] | None,
 ) -> ReferenceOutcome:
     """The closed-form route of :func:`generate_reference`: evaluate, certify, write."""
-    from .reference.accuracy import PrecisionNotReached
+    from ..core.accuracy import PrecisionNotReached
 
     say(f"plan: {digits} digits; the closed form ({closed.name}) in {label(prec)}")
     started = time.perf_counter()
@@ -497,7 +497,7 @@ class _ClosedForm:
         The names come from the model the integration would build, so that the file holds
         every output variable and monitor the integrated run would write, and nothing else.
         """
-        from .families import FAMILIES
+        from ..core.families import FAMILIES
 
         variant = _with_precision(self.scene, prec, None)
         model = FAMILIES[variant.family].build(variant)
@@ -512,9 +512,9 @@ class _ClosedForm:
     ) -> tuple[Any, Certificate, int]:
         """The scene's outputs in ``prec`` from the closed form, their certificate, and the
         number of chunks read back from ``store`` (see :func:`.reference.evaluate.evaluate`)."""
-        from .families import FAMILIES
-        from .reference.evaluate import evaluate
-        from .result import Result, versions
+        from ..core.families import FAMILIES
+        from ..core.result import Result, versions
+        from .closed_form import evaluate
 
         wall = time.perf_counter()
         variant = _with_precision(self.scene, prec, None)
@@ -568,7 +568,7 @@ class _FreeBody(_ClosedForm):
     name = "FreeRigidBody, Jacobi elliptic functions"
 
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
-        from .reference.evaluate import FreeBodyJob
+        from .closed_form import FreeBodyJob
 
         variables, monitors = tuple(model.outputs), tuple(model.monitors)
         if not (
@@ -597,7 +597,7 @@ class _FreeBody(_ClosedForm):
         """The invariable-plane crossings of the output span, as the run records them."""
         import mpmath
 
-        from .result import EventLog
+        from ..core.result import EventLog
 
         axes = [e.label for e in model.events]
         if not axes:
@@ -630,7 +630,7 @@ class _FreeBody(_ClosedForm):
     def certificate(self, result: Any, digits: int) -> Certificate:
         import mpmath
 
-        from .rotation.closed_form import FreeRigidBody
+        from ..rotation.closed_form import FreeRigidBody
 
         body = self.scene.model
         dps = digits + 10
@@ -710,7 +710,7 @@ class _Projectile(_ClosedForm):
     name = "Hamilton's projectile, (113.)-(114.), (120.)"
 
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
-        from .reference.evaluate import ProjectileJob
+        from .closed_form import ProjectileJob
 
         variables, monitors = tuple(model.outputs), tuple(model.monitors)
         if not (
@@ -737,7 +737,7 @@ class _Projectile(_ClosedForm):
     def certificate(self, result: Any, digits: int) -> Certificate:
         import mpmath
 
-        from .hamilton.projectile import projectile_solution
+        from ..hamilton.projectile import projectile_solution
 
         h = self.scene.model
         c = h.constants
@@ -765,13 +765,13 @@ class _Projectile(_ClosedForm):
 
 
 def _upper(x: Any) -> float:
-    from .reference.evaluate import upper
+    from .closed_form import upper
 
     return upper(x)
 
 
 def _rounding(prec: Precision) -> Any:
-    from .reference.evaluate import Rounding
+    from .closed_form import Rounding
 
     return Rounding(prec.kind, prec.bits)
 
@@ -892,7 +892,7 @@ def _claim_workdir(workdir: Path) -> None:
 def _remove_workdir(workdir: Path) -> None:
     """Remove what the runs wrote in ``workdir``; anything else stays, with its directory."""
     from .checkpoint import remove_checkpoints
-    from .reference.evaluate import remove_saved
+    from .closed_form import remove_saved
 
     for run_dir in workdir.glob("run-*"):
         remove_checkpoints(run_dir)
@@ -911,7 +911,7 @@ def read_certificate(path: str | Path) -> dict[str, Any]:
     ResultFileError
         The file is not a result file, is damaged, or has no certificate.
     """
-    from .files import ResultFileError, open_ours
+    from ..core.files import ResultFileError, open_ours
 
     with open_ours(path, "result") as f:
         if "certificate" not in f:

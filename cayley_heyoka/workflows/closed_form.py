@@ -1,7 +1,7 @@
 """Closed forms evaluated at a scene's output times, in parallel over cores.
 
 The route of ``cayley-heyoka reference`` for scenes with a closed form
-(:mod:`cayley_heyoka.reference_run`): each output time is evaluated independently — the free
+(:mod:`cayley_heyoka.workflows.reference`): each output time is evaluated independently — the free
 body's :meth:`~cayley_heyoka.reference.FreeRigidBody.at`, the projectile's
 :func:`~cayley_heyoka.reference.projectile_solution` — each certified by its own two working
 precisions, then rounded once to the file's precision. The certificate of a written value is

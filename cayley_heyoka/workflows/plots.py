@@ -1,6 +1,6 @@
 """Plots of result and sweep files: drift against time, the polhode, the orbit, the crossings.
 
-Each drawing function takes a :class:`~cayley_heyoka.result.Result` and an optional matplotlib
+Each drawing function takes a :class:`~cayley_heyoka.core.result.Result` and an optional matplotlib
 ``Axes``. Without one it draws a whole figure (through pyplot, so it shows in a notebook) and
 returns its main axes; ``ax.figure`` is the figure. :func:`plot_file` and the ``cayley-heyoka
 plot FILE --kind KIND`` command draw a result or sweep file straight to a PNG.
@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .result import Result
+from ..core.result import Result
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -498,7 +498,8 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
     Parameters
     ----------
     path
-        A result file (``cayley_heyoka.result``) or a sweep file (``cayley_heyoka.sweep``:
+        A result file (``cayley_heyoka.core.result``) or a sweep file
+        (``cayley_heyoka.workflows.sweep``:
         dataset ``t``, group ``drift`` of (members, n) arrays; ``kind="drift"`` only).
     kind
         One of :data:`KINDS`.
@@ -546,7 +547,7 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
             _orbit_figure(fig, result)
         else:
             crossings(result, ax=fig.add_subplot())
-    from .files import PNG_SOFTWARE, write_atomically
+    from ..core.files import PNG_SOFTWARE, write_atomically
 
     # The Software tag is how a later `plot` recognises a PNG it may replace.
     tag = {"metadata": {"Software": f"{PNG_SOFTWARE} plot"}} if fmt_out == "png" else {}
@@ -571,7 +572,7 @@ def _file_format(path: Path) -> str:
 
 
 def _read_sweep(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], str]:
-    from .files import open_ours
+    from ..core.files import open_ours
 
     with open_ours(path, "sweep") as f:  # checksum verified: a damaged file is not drawn
         complete = "t" in f and "drift" in f and len(f["drift"])

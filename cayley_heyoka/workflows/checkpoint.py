@@ -1,6 +1,6 @@
 """Runs that survive interruption: fixed stretches, each written to disk before the next.
 
-A :class:`CheckpointedRun` advances a :class:`~cayley_heyoka.engine.Propagation` to ``count``
+A :class:`CheckpointedRun` advances a :class:`~cayley_heyoka.core.engine.Propagation` to ``count``
 equally spaced boundary times. After each stretch it writes, into a work directory, the rows
 recorded (``segment-NNNNNN.npz``) and then the integrator's snapshot (``snapshot.json``); each
 file is written under a temporary name and renamed into place, so a process killed at any
@@ -31,9 +31,9 @@ from typing import Any
 
 import numpy as np
 
-from .engine import Progress, Propagation
-from .result import Result, versions
-from .scene import Scene
+from ..core.engine import Progress, Propagation
+from ..core.result import Result, versions
+from ..core.scene import Scene
 
 FORMAT = "cayley_heyoka.checkpoint"
 #: Names of the stretch files.

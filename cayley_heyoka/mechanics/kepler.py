@@ -16,10 +16,10 @@ orbit — the Kepler orbit through its inertial position and velocity — is des
    anomaly) and mean anomaly ``M``.
 
 Frame 1 is placed in frame 0 by ``frame = (θ′, σ′, φ′)`` — node longitude, node departure and
-inclination, in that order, as in :func:`~cayley_heyoka.orbit.frames.plane_matrix` — evaluated at
-the epoch of the state; the default ``(0, 0, 0)`` makes frame 1 the fixed frame. The osculating
-ellipse is defined by the *inertial* velocity; frame 1 only supplies the axes the angles are
-measured on (no frame-rotation term is subtracted).
+inclination, in that order, as in :func:`~cayley_heyoka.mechanics.frames.plane_matrix` —
+evaluated at the epoch of the state; the default ``(0, 0, 0)`` makes frame 1 the fixed frame.
+The osculating ellipse is defined by the *inertial* velocity; frame 1 only supplies the axes
+the angles are measured on (no frame-rotation term is subtracted).
 
 **The gauge Σ.** Only ``u = ρ − Σ`` is a function of the instantaneous state; ``Σ`` at the epoch
 is chosen freely (argument ``sigma``, default 0: the departure point at the ascending node), and
@@ -60,7 +60,8 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from cayley_heyoka.orbit.frames import (
+from cayley_heyoka.core.accuracy import to_mpf
+from cayley_heyoka.mechanics.frames import (
     cross,
     dot,
     functions_for,
@@ -69,7 +70,6 @@ from cayley_heyoka.orbit.frames import (
     plane_matrix,
     transpose,
 )
-from cayley_heyoka.reference.accuracy import to_mpf
 
 __all__ = [
     "CayleyState",

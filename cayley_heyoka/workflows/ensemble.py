@@ -7,7 +7,7 @@ member to one end time, returning the final states in the model's state variable
 
     import numpy as np
     import cayley_heyoka as ch
-    from cayley_heyoka.ensemble import ensemble_state, propagate_ensemble
+    from cayley_heyoka.workflows.ensemble import ensemble_state, propagate_ensemble
 
     scene = ch.Scene.from_dict({"body": {"inertia": [1.0, 1.5, 2.5]},
                                 "initial": {"rates": [0.3, 1.0, 0.5]},
@@ -59,11 +59,11 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import engine, lanes
-from .families import FAMILIES
-from .model import Model
-from .precision import Number, Precision
-from .scene import IntegratorOptions, Scene
+from ..core import engine, lanes
+from ..core.families import FAMILIES
+from ..core.model import Model
+from ..core.precision import Number, Precision
+from ..core.scene import IntegratorOptions, Scene
 
 MODES = ("batch", "threads", "serial")
 

@@ -1,6 +1,6 @@
 """The file of a conservation sweep: every member's drift, final values, steps and status.
 
-Written by :func:`cayley_heyoka.sweep.run_sweep` (layout: :class:`SweepResult` and
+Written by :func:`cayley_heyoka.workflows.sweep.run_sweep` (layout: :class:`SweepResult` and
 docs/tutorials/sweeps.md); read with :func:`load_sweep`.
 """
 
@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from .files import FORMAT_VERSION, FORMATS, OutputError, Staged, open_ours, seal, write_hdf5
-from .precision import Precision
-from .scene import Scene
+from ..core.files import FORMAT_VERSION, FORMATS, OutputError, Staged, open_ours, seal, write_hdf5
+from ..core.precision import Precision
+from ..core.scene import Scene
 from .study import Member, Study, show_number
 
 FORMAT = FORMATS["sweep"]
@@ -184,7 +184,7 @@ class SweepResult:
             The file is missing, not a sweep file, damaged or incomplete (as
             :meth:`Result.load`).
         """
-        from .result import read_array
+        from ..core.result import read_array
 
         with open_ours(path, "sweep") as f:
             prec = Precision.from_spec(json.loads(f.attrs["precision"]))
@@ -307,7 +307,7 @@ def fill_chunk(result: SweepResult, part: Chunk, prec: Precision) -> None:
 
 
 def _create(f: Any, result: SweepResult) -> None:
-    from .result import string_dtype, write_array
+    from ..core.result import string_dtype, write_array
 
     prec = result.precision
     f.attrs["format"] = FORMAT

@@ -369,7 +369,7 @@ def exceeds_pi(value: Number) -> bool:
 def normalised(values: Iterable[Number], precision: Precision) -> tuple[Number, ...]:
     """``v / |v|`` correctly rounded in ``precision`` (as decimal text with guard digits).
 
-    A direction accepted to 1e-12 of unit length (:func:`cayley_heyoka.scene.unit_vector`)
+    A direction accepted to 1e-12 of unit length (:func:`cayley_heyoka.core.scene.unit_vector`)
     and used as written would carry that error into a quad run; one of exactly unit length
     (``[0, 0.6, 0.8]``) is returned as written.
     """
