@@ -16,7 +16,8 @@ import pytest
 import cayley_heyoka.core.engine as engine
 from cayley_heyoka import Scene, load_scene
 from cayley_heyoka.cli import main
-from cayley_heyoka.workflows.checks import CheckOptions, check_scene
+from cayley_heyoka.core.consistency import CheckOptions
+from cayley_heyoka.workflows.checks import check_scene
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SCENES = sorted(p.name for p in EXAMPLES.glob("*.toml"))

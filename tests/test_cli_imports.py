@@ -91,7 +91,8 @@ def test_run_loads_no_other_commands_workflow(tmp_path):
         "[output]\ntimes = [0, 1]\n"
     )
     others = tuple(
-        f"cayley_heyoka.{m}" for m in ("plots", "sweep", "sweep_result", "reference_run", "checks")
+        f"cayley_heyoka.workflows.{m}"
+        for m in ("plots", "sweep", "sweep_result", "reference", "checks")
     )
     code, loaded = _loaded(
         ["run", str(scene), "--no-progress"], ("heyoka", "matplotlib", "dask", *others)

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 import cayley_heyoka as ch
+from cayley_heyoka.core.evaluation import PARALLEL_FROM, Rounding
 from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.reference import FreeRigidBody
-from cayley_heyoka.workflows.closed_form import PARALLEL_FROM, Rounding
 from cayley_heyoka.workflows.reference import generate_reference, read_certificate
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"

@@ -16,14 +16,10 @@ import pytest
 
 import cayley_heyoka as ch
 from cayley_heyoka.cli import main
+from cayley_heyoka.core.certificate import next_precision, precision_for
 from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.reference import FreeRigidBody
-from cayley_heyoka.workflows.reference import (
-    generate_reference,
-    next_precision,
-    precision_for,
-    read_certificate,
-)
+from cayley_heyoka.workflows.reference import generate_reference, read_certificate
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -21,6 +21,7 @@ from helpers import free_body
 from cayley_heyoka import Result, Scene, run
 from cayley_heyoka.cli import main
 from cayley_heyoka.cli.terminal import printable
+from cayley_heyoka.core.consistency import CheckReport, CheckRow
 from cayley_heyoka.core.files import (
     DIGEST,
     FORMAT_VERSION,
@@ -31,7 +32,6 @@ from cayley_heyoka.core.files import (
     seal,
     write_atomically,
 )
-from cayley_heyoka.workflows.checks import CheckReport, CheckRow
 from cayley_heyoka.workflows.reference import WORK_MARKER, generate_reference, read_certificate
 from cayley_heyoka.workflows.sweep_result import load_sweep
 

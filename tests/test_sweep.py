@@ -15,11 +15,11 @@ import pytest
 
 import cayley_heyoka as ch
 from cayley_heyoka.cli import main
+from cayley_heyoka.workflows.members import PATH_LANES
 from cayley_heyoka.workflows.sweep import (
     FAILED,
     NOT_RUN,
     OK,
-    PATH_LANES,
     Study,
     SweepResult,
     load_study,

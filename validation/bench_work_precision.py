@@ -59,8 +59,8 @@ import cayley_heyoka as ch  # noqa: E402
 from cayley_heyoka.core.engine import compile_model  # noqa: E402
 from cayley_heyoka.core.families import FAMILIES  # noqa: E402
 from cayley_heyoka.core.model import own_terminal  # noqa: E402
-from cayley_heyoka.hamilton import planets as hp  # noqa: E402
-from cayley_heyoka.hamilton.planets_model import initial_state as planets_initial_state  # noqa: E402
+from cayley_heyoka.hamilton.predominant_mass import system as hp  # noqa: E402
+from cayley_heyoka.hamilton.predominant_mass.model import initial_state as planets_initial_state  # noqa: E402
 from cayley_heyoka.mechanics import kepler as oe  # noqa: E402
 from cayley_heyoka.reference import FreeRigidBody  # noqa: E402
 

@@ -35,10 +35,11 @@ def command(args: argparse.Namespace) -> int:
 
 
 def _check(args: argparse.Namespace) -> int:
+    from ..core.consistency import parse_settings
     from ..core.errors import IntegrationError
     from ..core.files import OutputError
     from ..core.scene import load_scene
-    from ..workflows.checks import check_scene, parse_settings
+    from ..workflows.checks import check_scene
 
     if not destination(args, "check"):
         return 2

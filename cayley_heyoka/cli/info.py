@@ -31,7 +31,7 @@ def command(args: argparse.Namespace) -> int:
 
             text = SweepResult.load(path).summary()
         elif kind == "check":
-            from ..workflows.checks import CheckReport
+            from ..core.consistency import CheckReport
 
             text = CheckReport.load(path).text()
         else:  # a result, or whatever it is: the loader says what is wrong with it

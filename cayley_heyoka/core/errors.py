@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from .result import Result
+from typing import Any
 
 
 class SceneError(ValueError):
@@ -28,10 +25,12 @@ class SceneError(ValueError):
 class IntegrationError(RuntimeError):
     """An integration stopped before the last output time.
 
-    The results computed before the failure are kept in :attr:`result`.
+    The results computed before the failure are kept in :attr:`result` (a
+    :class:`~cayley_heyoka.core.result.Result`; typed loosely here, since results are built
+    on these errors' module and not the other way round).
     """
 
-    def __init__(self, message: str, result: Result) -> None:
+    def __init__(self, message: str, result: Any) -> None:
         self.result = result
         super().__init__(message)
 
@@ -44,6 +43,6 @@ class Interrupted(KeyboardInterrupt):
     among many (a sweep) must still stop on Ctrl-C.
     """
 
-    def __init__(self, message: str, result: Result) -> None:
+    def __init__(self, message: str, result: Any) -> None:
         self.result = result
         super().__init__(message)

@@ -1,20 +1,58 @@
-"""The registry of model families: which scene tables each owns, how it parses and builds."""
+"""Model families: the protocol each implements, and the registry that finds them.
+
+A family owns some of a scene's tables and turns them into a :class:`~.model.Model`; the core
+(scene, engine) and the workflows (checks, references, sweeps, plots, the command line) reach
+it only through its :class:`Family` record, never by its name. Ours are registered here by
+module path; another package adds one through the entry-point group
+``cayley_heyoka.families`` (``name = "package.module:FAMILY"``), without touching ours. A
+family's module is imported the first time the registry is asked for it.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from importlib import import_module
 from typing import Any
 
 from .errors import SceneError
 
+#: The entry-point group through which another package registers a family.
+ENTRY_POINTS = "cayley_heyoka.families"
+_OURS = {
+    "rotation": "cayley_heyoka.rotation.family:FAMILY",
+    "orbit": "cayley_heyoka.orbit.family:FAMILY",
+    "hamiltonian": "cayley_heyoka.hamilton.family:FAMILY",
+}
+
 
 @dataclass(frozen=True)
 class Family:
-    """A model family: its scene tables, the table that identifies it, parse, build, the
-    checks that need the whole scene (e.g. the start time) and its consistency check
-    (``consistency_check(scene, options) -> CheckReport``, ``cayley-heyoka check``)."""
+    """What a model family provides.
+
+    Attributes
+    ----------
+    name
+        The family's name (``scene.family``).
+    key_table
+        The scene table that identifies the family.
+    tables
+        Every table the family owns.
+    parse
+        The family's tables (a mapping) → its parsed, validated model description.
+    build
+        A scene → its :class:`~.model.Model`.
+    check
+        Validation that needs the whole scene (the start time, the outputs), or None.
+    output_keys
+        Output-table keys the family adds to the generic ones.
+    consistency_check
+        ``(scene, options) -> CheckReport`` (:mod:`.consistency`; ``cayley-heyoka check``),
+        or None.
+    closed_form
+        ``scene -> ClosedForm | None`` (:mod:`.closed_form`): the motion in closed form where
+        the scene has one (``cayley-heyoka reference``), or None for a family without any.
+    """
 
     name: str
     key_table: str
@@ -24,72 +62,71 @@ class Family:
     check: Callable[[Any], None] | None = None
     output_keys: tuple[str, ...] = ()
     consistency_check: Callable[[Any, Any], Any] | None = None
+    closed_form: Callable[[Any], Any] | None = None
 
 
-def _later(module: str, name: str) -> Callable[[Any, Any], Any]:
-    """``module.name``, imported when first called: the checks import the families."""
+def later(module: str, name: str) -> Callable[..., Any]:
+    """``module.name`` called with the same arguments, imported at the first call (a family's
+    checks and closed forms load only when used)."""
 
-    def call(scene: Any, options: Any) -> Any:
-        return getattr(import_module(module, __package__), name)(scene, options)
+    def call(*args: Any) -> Any:
+        return getattr(import_module(module), name)(*args)
 
+    call.__qualname__ = f"later({module}.{name})"
     return call
 
 
-def _rotation() -> Family:
-    from ..rotation.model import build_model
-    from ..rotation.scene import RigidBody
+class _Registry(Mapping[str, Family]):
+    """Family name → :class:`Family`, each imported when first asked for."""
 
-    return Family(
-        "rotation",
-        "body",
-        ("body", "initial", "attitude", "forces"),
-        RigidBody.parse,
-        build_model,
-        consistency_check=_later("..rotation.closed_form_check", "check_rotation"),
-    )
+    def __init__(self) -> None:
+        self._paths: dict[str, str] | None = None
+        self._loaded: dict[str, Family] = {}
 
+    def _known(self) -> dict[str, str]:
+        if self._paths is None:
+            from importlib import metadata
 
-def _orbit() -> Family:
-    from ..orbit.model import build_model, check
-    from ..orbit.scene import Orbit
+            paths = dict(_OURS)
+            for ep in metadata.entry_points(group=ENTRY_POINTS):
+                if ep.name in _OURS:
+                    raise SceneError(
+                        "families",
+                        f"the entry point {ep.value!r} registers a family named {ep.name!r}, "
+                        "which is one of cayley_heyoka's own",
+                    )
+                paths[ep.name] = ep.value
+            self._paths = paths
+        return self._paths
 
-    tables = ("orbit", "perturbations", "reference_plane")
-    return Family(
-        "orbit",
-        "orbit",
-        tables,
-        Orbit.parse,
-        build_model,
-        check,
-        consistency_check=_later("..orbit.cartesian_check", "check_orbit"),
-    )
+    def __getitem__(self, name: str) -> Family:
+        family = self._loaded.get(name)
+        if family is None:
+            path = self._known()[name]
+            module, _, attr = path.partition(":")
+            family = getattr(import_module(module), attr or "FAMILY")
+            if not isinstance(family, Family) or family.name != name:
+                raise SceneError("families", f"{path!r} is not the Family {name!r}")
+            self._loaded[name] = family
+        return family
 
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._known())
 
-def _hamiltonian() -> Family:
-    from ..hamilton.model import build_model
-    from ..hamilton.scene import Hamiltonian
-
-    tables = ("hamiltonian", "initial")
-    return Family(
-        "hamiltonian",
-        "hamiltonian",
-        tables,
-        Hamiltonian.parse,
-        build_model,
-        output_keys=("principal_function",),
-        consistency_check=_later("..hamilton.projectile_check", "check_hamiltonian"),
-    )
+    def __len__(self) -> int:
+        return len(self._known())
 
 
-FAMILIES: dict[str, Family] = {f.name: f for f in (_rotation(), _orbit(), _hamiltonian())}
+FAMILIES: Mapping[str, Family] = _Registry()
 
 
 def family_of(data: Mapping[str, Any]) -> str:
     """The family whose identifying table the scene has."""
-    found = [f.name for f in FAMILIES.values() if f.key_table in data]
+    families = [FAMILIES[name] for name in FAMILIES]
+    found = [f.name for f in families if f.key_table in data]
     if len(found) == 1:
         return found[0]
-    expected = ", ".join(f"[{f.key_table}] ({f.name})" for f in FAMILIES.values())
+    expected = ", ".join(f"[{f.key_table}] ({f.name})" for f in families)
     if not found:
         raise SceneError("scene", f"names no model family; expected one of the tables {expected}")
     raise SceneError("scene", f"names several model families {found}; use one of {expected}")

@@ -19,11 +19,12 @@ import numpy as np
 
 from ..core.errors import SceneError
 from ..core.expressions import parse_expression
-from ..core.model import EventSpec, Model, ParTable
+from ..core.model import Model, ParTable
 from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
 from .canonical import canonical_equations, principal_rate
 from .elements import check_flow, compose, element_equations
+from .outputs import select_monitors, user_events, wants_principal_function
 from .scene import Hamiltonian
 
 
@@ -31,7 +32,7 @@ def build_model(scene: Scene) -> Model:
     """Turn a validated Hamiltonian scene into a :class:`~cayley_heyoka.core.model.Model`."""
     ham: Hamiltonian = scene.model
     if ham.model == "predominant_mass":
-        from .planets_model import build_model as build_predominant_mass
+        from .predominant_mass.model import build_model as build_predominant_mass
 
         return build_predominant_mass(scene)
     prec = scene.integrator.precision
@@ -50,7 +51,7 @@ def build_model(scene: Scene) -> Model:
         system, outputs, energy, rate_of_S = _elements(scene, ham, eta, varpi, H1, H2, pars, prec)
         state_varpi = None
     initial: list[Any] = [*ham.eta, *ham.varpi]
-    if _principal_function(scene):
+    if wants_principal_function(scene):
         S = hy.make_vars("S")
         if rate_of_S is None:
             rate_of_S = principal_rate(H, system, state_varpi)
@@ -60,7 +61,7 @@ def build_model(scene: Scene) -> Model:
     monitors = {"energy": energy}
     conserved = () if ham.time_dependent else ("energy",)
     monitors, conserved = select_monitors(scene, monitors, conserved)
-    events = _events(scene, outputs, pars)
+    events = user_events(scene, outputs, pars)
     return Model(
         "hamiltonian",
         system,
@@ -149,40 +150,3 @@ def _elements(scene, ham: Hamiltonian, eta, varpi, H1, H2, pars: ParTable, prec)
     eta_rates = [rhs for _, rhs in canonical_equations(H, eta, varpi)[:n]]
     lagrangian = hy.sum([p * r for p, r in zip(varpi, eta_rates, strict=True)]) - H
     return system, outputs, energy, compose(lagrangian, eta, varpi, flow_eta, flow_varpi)
-
-
-def select_monitors(scene: Scene, monitors: dict, conserved: tuple) -> tuple[dict, tuple]:
-    """The monitors the scene's ``output.monitors`` asks for (all when it names none)."""
-    wanted = scene.output.monitors
-    if wanted is None:
-        return monitors, conserved
-    unknown = [m for m in wanted if m not in monitors]
-    if unknown:
-        raise SceneError(
-            "output.monitors",
-            f"{unknown[0]!r} is not available here; available: {list(monitors)}",
-        )
-    chosen = {k: v for k, v in monitors.items() if k in wanted}
-    return chosen, tuple(k for k in conserved if k in wanted)
-
-
-def _principal_function(scene: Scene) -> bool:
-    value = scene.output.options.get("principal_function", False)
-    if not isinstance(value, bool):
-        raise SceneError("output.principal_function", f"must be true or false, got {value!r}")
-    return value
-
-
-def _events(scene: Scene, outputs: dict, pars: ParTable) -> list[EventSpec]:
-    events = []
-    for name in scene.output.events:
-        if name not in scene.events:
-            known = list(scene.events)
-            raise SceneError("output.events", f"unknown event {name!r}; known: {known}")
-        ev = scene.events[name]
-        expr = parse_expression(ev.expression, outputs, pars, f"events.{name}.expression")
-        events.append(EventSpec(name, name, expr, ev.direction))
-    for name in scene.events:
-        if name not in scene.output.events:
-            raise SceneError(f"events.{name}", "is defined but not listed in output.events")
-    return events

@@ -28,10 +28,10 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..core.consistency import CheckReport, CheckRow
 from ..core.families import FAMILIES
 from ..core.precision import Precision
 from ..core.scene import Scene
-from ..workflows.checks import CheckReport, CheckRow
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,7 @@ class PrincipalCheck:
     epsilon: float
 
     def report(self) -> CheckReport:
-        """The residuals as a :class:`~cayley_heyoka.workflows.checks.CheckReport`.
+        """The residuals as a :class:`~cayley_heyoka.core.consistency.CheckReport`.
 
         Each residual is a few roundings of quantities of size :attr:`scale`, amplified by the
         chain rule's :attr:`condition`; the bound is 64 ε · scale · condition, written here as

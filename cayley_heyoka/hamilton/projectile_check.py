@@ -5,7 +5,7 @@
   certificate of ``cayley-heyoka reference``, and the partial derivatives of S
   (:mod:`.principal`);
 * the system with one predominant mass: Hamilton's elements against the canonical equations
-  (:mod:`.planets_check`);
+  (:mod:`.predominant_mass.check`);
 * any other Hamiltonian: the partial derivatives of S (:mod:`.principal`).
 
 The closed-form rows are bounded as the torque-free body's are
@@ -20,14 +20,14 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.scene import Scene
-from ..workflows.checks import (
+from ..core.consistency import (
     CheckOptions,
     CheckReport,
     CheckRow,
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.scene import Scene
 
 __all__ = ["check_hamiltonian", "check_projectile"]
 
@@ -40,7 +40,7 @@ def check_hamiltonian(scene: Scene, options: CheckOptions) -> CheckReport:
     """The check of a hamiltonian scene (see the module's docstring). It takes no options."""
     options.accept((), "check of a hamiltonian scene")
     if scene.model.model == "predominant_mass":
-        from .planets_check import check_formulations
+        from .predominant_mass.check import check_formulations
 
         return check_formulations(scene)
     from .principal import check_principal_function
@@ -75,7 +75,7 @@ def check_projectile(scene: Scene) -> CheckReport:
         measured on the closed form at 16 times over the span.
     """
     from ..core.engine import run
-    from ..workflows.reference import closed_form_for
+    from .projectile_reference import closed_form
 
     if scene.model.model != "projectile":
         raise ValueError("scene: needs model = 'projectile'")
@@ -85,7 +85,7 @@ def check_projectile(scene: Scene) -> CheckReport:
     # The closed form needs only the constants and the initial state; whichever formulation
     # the run took, it records η and ϖ.
     data["hamiltonian"]["formulation"] = "canonical"
-    closed = closed_form_for(Scene.from_dict(data))
+    closed = closed_form(Scene.from_dict(data))
     prec = scene.integrator.precision
     cert = closed.certificate(result, prec.dps + 3)
     steps = int(result.counters.get("steps", 0))

@@ -8,7 +8,7 @@
     varying elements of the split instead of η, ϖ.
     ``model = "predominant_mass"`` with ``G``, ``central_mass`` and ``[[hamiltonian.bodies]]``
     (each a ``mass`` and either ``elements`` or ``position`` and ``velocity``): Hamilton's
-    system with one predominant mass (Second Essay §31–39; :mod:`.planets`), integrated in
+    system with one predominant mass (Second Essay §31–39; :mod:`.predominant_mass`), integrated in
     canonical heliocentric coordinates or through Hamilton's elements of every body.
 ``[initial]``
     ``eta`` and ``varpi``: the coordinates and momenta at the start time (N each; N = 3 for
@@ -28,9 +28,8 @@ from ..core.expressions import uses_time
 from ..core.precision import Number, exact_fraction, exceeds_pi
 from ..core.scene import check_keys, number, vector
 from ..mechanics.frames import cross, dot
-from ..mechanics.kepler import Elements
-from ..orbit.scene import ELEMENT_KEYS
-from . import planets
+from ..mechanics.kepler import ELEMENT_KEYS, Elements
+from .predominant_mass import system as planets
 
 MODELS = ("projectile", "predominant_mass")
 _MAX_DEGREES = 60

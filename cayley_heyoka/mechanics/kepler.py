@@ -85,6 +85,9 @@ __all__ = [
 Vector = list[Any]
 FIXED_FRAME = (0, 0, 0)
 
+#: The keys of an element set in a scene (``[orbit.elements]``, a planet's ``elements``).
+ELEMENT_KEYS = ("a", "e", "inclination", "node", "argument_of_pericentre", "mean_anomaly")
+
 
 @dataclass(frozen=True)
 class CayleyState:

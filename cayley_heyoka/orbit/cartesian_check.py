@@ -7,13 +7,12 @@ next precision (double → quad → MPFR). Positions and velocities are compared
 times in the fixed frame.
 
 The bounds follow Brouwer's round-off law (as the predominant-mass check's do,
-:mod:`cayley_heyoka.hamilton.planets_check`): each of the N steps of both runs rounds the state
-by about ε, the errors add like a random walk, and the flow carries each to the output times
-multiplied by at most its sensitivity to the initial state. The sensitivity is that of the
+:mod:`cayley_heyoka.hamilton.predominant_mass.check`): each of the N steps of both runs rounds
+the state by about ε, the errors add like a random walk, and the flow carries each to the output
+times multiplied by at most its sensitivity to the initial state. The sensitivity is that of the
 Kepler orbit through the starting state, measured on its closed form (the disturbing function
 moves it by a relative amount of its own size, covered by the factor 10): it grows along the
-track like (3/2) n t, the mean motion's response to an energy error.
-"""
+track like (3/2) n t, the mean motion's response to an energy error."""
 
 from __future__ import annotations
 
@@ -23,15 +22,15 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.scene import Scene
-from ..mechanics import kepler as el
-from ..workflows.checks import (
+from ..core.consistency import (
     CheckOptions,
     CheckReport,
     CheckRow,
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.scene import Scene
+from ..mechanics import kepler as el
 from .scene import FORMULATIONS
 
 __all__ = ["TWINS", "check_orbit", "check_twin"]
@@ -77,8 +76,8 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
         When the twin is the scene's own formulation, or the orbit is not an ellipse (the
         bound's sensitivity is the Kepler ellipse's).
     """
+    from ..core.certificate import label, next_precision
     from ..core.engine import run
-    from ..workflows.reference import label, next_precision
 
     orbit = scene.model
     twin = twin or ("precision" if orbit.formulation == "cartesian" else "cartesian")

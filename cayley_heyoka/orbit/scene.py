@@ -9,10 +9,10 @@ from typing import Any
 from ..core.errors import SceneError
 from ..core.precision import Number, exact_fraction, exceeds_pi
 from ..core.scene import check_keys, number, vector
+from ..mechanics.kepler import ELEMENT_KEYS
 from .disturbing import ThirdBody, Zonal, parse_perturbations
 
 FORMULATIONS = ("cayley", "quaternion", "cartesian", "encke")
-ELEMENT_KEYS = ("a", "e", "inclination", "node", "argument_of_pericentre", "mean_anomaly")
 #: Default of ``orbit.equatorial_limit``: below this sin Φ the Cayley angles stop (see docs).
 EQUATORIAL_LIMIT = "1e-3"
 

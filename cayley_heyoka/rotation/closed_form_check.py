@@ -3,14 +3,14 @@
 A torque-free body is run and compared, at its output times and invariable-plane crossings,
 with Cayley's 1843 solution (:class:`~cayley_heyoka.reference.FreeRigidBody`, docs/reference.md)
 through the closed-form certificate of ``cayley-heyoka reference``
-(:func:`cayley_heyoka.workflows.reference.closed_form_for`). A forced body has no closed form: its
-check is Cayley's 1846 element equations (:mod:`.element_check`).
+(:func:`cayley_heyoka.rotation.free_body_reference.closed_form`). A forced body has no closed
+form: its check is Cayley's 1846 element equations (:mod:`.element_check`).
 
 The bound of each row is fixed before the run by Brouwer's round-off law: N steps each round
 the state by about ε, the errors add like a random walk, and the flow carries each to the
 output times multiplied by at most its sensitivity to the initial state, measured on the
-closed form itself (:func:`~cayley_heyoka.workflows.checks.flow_sensitivity`). So the bound is
-``10 ε √N × sensitivity`` (:func:`~cayley_heyoka.workflows.checks.round_off_scale`); the sensitivity
+closed form itself (:func:`~cayley_heyoka.core.consistency.flow_sensitivity`). So the bound is
+``10 ε √N × sensitivity`` (:func:`~cayley_heyoka.core.consistency.round_off_scale`); the sensitivity
 grows with the span (the period depends on the invariants, so the phase walks), and near the
 separatrix with the period's dependence on them.
 """
@@ -24,15 +24,15 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.precision import exact_fraction
-from ..core.scene import Scene
-from ..workflows.checks import (
+from ..core.consistency import (
     CheckOptions,
     CheckReport,
     CheckRow,
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.precision import exact_fraction
+from ..core.scene import Scene
 from .attitude import quaternion_multiply
 
 __all__ = ["check_closed_form", "check_rotation", "check_twin"]
@@ -123,14 +123,14 @@ def check_closed_form(scene: Scene, times: int | None = None) -> CheckReport:
       plus 10 ε max(1, t) for the event's root.
     """
     from ..core.engine import run
-    from ..workflows.reference import closed_form_for
+    from .free_body_reference import closed_form
 
     if not scene.model.torque_free:
         raise ValueError("scene: the closed form is that of a torque-free body; it has forces")
     data = scene.to_dict()
     data.pop("events", None)
     scene = Scene.from_dict(data)
-    closed = closed_form_for(scene)
+    closed = closed_form(scene)
     result = run(scene)
     prec = scene.integrator.precision
     compared = _thinned(result, times)
@@ -255,8 +255,8 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
         exponentially, and so does the bound: the check then says that the run is as accurate
         as the motion's conditioning allows.
     """
+    from ..core.certificate import difference_certificate
     from ..core.engine import run
-    from ..workflows.reference import difference_certificate
 
     body = scene.model
     if body.formulation not in ("rodrigues", "quaternion"):

@@ -18,11 +18,11 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..core.consistency import CheckReport, CheckRow
 from ..core.errors import SceneError
 from ..core.model import ParTable
 from ..core.precision import Precision
 from ..core.scene import Scene
-from ..workflows.checks import CheckReport, CheckRow
 from . import attitude as att
 from . import equations as eq
 from .model import force_function, rodrigues_of_matrix

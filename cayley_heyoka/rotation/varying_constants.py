@@ -48,8 +48,8 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..core.consistency import CheckReport, CheckRow
 from ..core.precision import Precision
-from ..workflows.checks import CheckReport, CheckRow
 from . import attitude as att
 
 __all__ = [

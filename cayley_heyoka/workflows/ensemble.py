@@ -26,9 +26,9 @@ Modes (measured in validation/BENCHMARKS.md, section "Set-up cost and ensembles"
 ``"batch"``
     heyoka's batch integrator: ``heyoka.recommended_simd_size()`` members per SIMD lane set,
     each lane with its own step size; one batch integrator per worker thread, a lane handed the
-    next member as soon as its own is done (:mod:`.lanes`, the path sweeps take too). Each
-    member takes the serial mode's steps; its state differs by a few ulps (SIMD rounding).
-    Double precision only.
+    next member as soon as its own is done (:mod:`cayley_heyoka.core.lanes`, the path sweeps
+    take too). Each member takes the serial mode's steps; its state differs by a few ulps
+    (SIMD rounding). Double precision only.
 ``"threads"``
     the scalar integrator, one copy per worker thread, each sweeping its share of members.
 ``"serial"``
@@ -306,7 +306,7 @@ def _initial_states(values: Any, names: Sequence[str], prec: Precision) -> np.nd
 def _lanes(
     model: Model, options: IntegratorOptions, states: np.ndarray, start: Any, end: Any, workers: int
 ) -> EnsembleResult:
-    """Batch mode: the members in SIMD lanes (:mod:`.lanes`, the sweeps' path)."""
+    """Batch mode: the members in SIMD lanes (:mod:`cayley_heyoka.core.lanes`, the sweeps' path)."""
     batch, cached = lanes.compile_batch(model, options)
     pars = np.asarray(model.pars.values, dtype=float)
     grid = np.array([start, end], dtype=float)

@@ -9,48 +9,23 @@ output time, the final values of the result variables, the Taylor steps, the cou
 recorded event and whether it completed (layout: :class:`SweepResult` and
 docs/tutorials/sweeps.md).
 
-How members are integrated, on one machine (:func:`propagate_members`):
-
-* members are grouped by compiled structure (scenes differing only in numbers share code);
-* in double precision a group goes through heyoka's batch integrators in SIMD lanes, one per
-  thread (:mod:`.lanes`, which ``propagate_ensemble`` shares), terminal events included (the
-  Rodrigues chart's re-basing, the orbit's revolution count and equatorial stop, Encke's
-  rectification: each member's handler acts on its lane): the steps, events and counts of
-  :func:`cayley_heyoka.run`, its states to a few ulps;
-* in quad or multiprecision, a group without terminal events goes through heyoka's ensemble
-  propagation (``heyoka.ensemble_propagate_grid``, threads), each member's state, parameters and
-  start time set on a copy of the compiled integrator (run()'s bits); one with terminal events
-  through :func:`cayley_heyoka.run`, since their handlers cannot run inside heyoka's ensemble;
-* monitors are evaluated from the recorded states by :func:`.engine.evaluate_outputs`.
-
-The Dask backend (:mod:`.sweep_dask`) runs the same function on chunks of members in worker
-processes and gathers the chunks into the one file.
+Members are integrated by :mod:`.members` (its docstring says how); the Dask backend
+(:mod:`.sweep_dask`) runs the same code on chunks of members in worker processes and gathers
+the chunks into the one file.
 """
 
 from __future__ import annotations
 
 import os
-import threading
 import time
 from collections import Counter
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from ..core.errors import IntegrationError
-from ..core.precision import Precision
 from ..core.scene import Scene
-from .study import (
-    DEFAULT_CHUNK,
-    Member,
-    Parameter,
-    RunOptions,
-    Study,
-    load_study,
-    override_run,
-)
+from .members import integrate_members, prepare_members, propagate_members, split
+from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
 from .sweep_result import (
     FAILED,
     NOT_RUN,
@@ -62,20 +37,15 @@ from .sweep_result import (
     empty_result,
     fill_chunk,
     load_sweep,
-    nan_final,
 )
 
-#: How a member was integrated (the counts by path are in the file's metadata).
-PATH_LANES = "cayley_heyoka.lanes"
 #: Most members whose validated scenes a local sweep keeps between validating and running.
 _KEEP_SCENES = 2**16
-PATH_ENSEMBLE = "heyoka.ensemble_propagate_grid"
-PATH_RUN = "cayley_heyoka.run"
+
 
 Progress = Callable[[int, int], None]
 
 
-# ---------------------------------------------------------------------- running
 def layout_of(study: Study) -> Layout:
     """The file's columns, from the first member's model."""
     from ..core.families import FAMILIES
@@ -85,6 +55,41 @@ def layout_of(study: Study) -> Layout:
     events = tuple(dict.fromkeys(e.name for e in model.events))
     grid = scene.output.time_grid(scene.integrator.precision)
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
+
+
+def _pipeline(
+    study: Study,
+    indexed: list,
+    layout: Layout,
+    threads: int,
+    size: int,
+    scenes: list[Scene] | None,
+    take: Callable[[Chunk], None],
+) -> None:
+    """Chunk by chunk, building the next chunk's models while the current one integrates:
+    heyoka steps without the GIL, so the Python work of one overlaps the stepping of the other.
+    An exception (Ctrl-C in ``take``'s progress) cancels the chunk in flight (dropped: its
+    members stay NOT_RUN) within a step (:class:`.lanes.Cancel`)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from ..core import lanes
+
+    prec = study.precision
+    cancel = lanes.Cancel()
+    pending = None
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        try:
+            for part in split(indexed, size):
+                given = [scenes[i] for i, _ in part] if scenes is not None else None
+                prepared = prepare_members(study, part, layout, given)
+                if pending is not None:
+                    take(pending.result())
+                pending = pool.submit(integrate_members, prepared, layout, prec, threads, cancel)
+            if pending is not None:
+                take(pending.result())
+        except BaseException:
+            cancel.set()
+            raise
 
 
 def run_sweep(
@@ -190,357 +195,6 @@ def run_sweep(
         if writer is not None:
             writer.close(result.metadata)
     return result
-
-
-def propagate_members(
-    study: Study,
-    members: Sequence[Member],
-    layout: Layout,
-    threads: int = 1,
-    scenes: Sequence[Scene] | None = None,
-) -> Chunk:
-    """Integrate some members of a study on this machine (the local path, run by each Dask
-    task too).
-
-    Parameters
-    ----------
-    study
-        The study.
-    members
-        ``(index, values)`` pairs: the member's index in the study and its parameter values.
-    layout
-        The columns to fill (:func:`layout_of`).
-    threads
-        Threads for heyoka's ensemble propagation and for the members run one by one.
-    scenes
-        The members' validated scenes, if the caller has them (else validated here).
-
-    Returns
-    -------
-    Chunk
-        The members' rows. A member that fails (a non-finite state, a stop before the last
-        output time, a model that cannot be built) is marked ``FAILED`` with the reason; the
-        others are unaffected.
-    """
-    prepared = prepare_members(study, members, layout, scenes)
-    return integrate_members(prepared, layout, study.precision, threads)
-
-
-#: A chunk's rows and its members grouped by compiled structure: (row, scene, model).
-Prepared = tuple[Chunk, dict[str, list[tuple[int, Scene, Any]]]]
-
-
-def prepare_members(
-    study: Study,
-    members: Sequence[Member],
-    layout: Layout,
-    scenes: Sequence[Scene] | None = None,
-) -> Prepared:
-    """The first half of :func:`propagate_members`: each member's scene and model, grouped by
-    compiled structure (Python work, run while the previous chunk integrates)."""
-    from ..core.families import FAMILIES
-
-    prec = study.precision
-    n = len(members)
-    part = Chunk(
-        index=np.array([i for i, _ in members], dtype=np.int64),
-        status=np.full(n, FAILED),
-        message=[""] * n,
-        steps=np.zeros(n, dtype=np.int64),
-        drift={k: np.full((n, layout.n_times), np.nan) for k in layout.drift},
-        final=nan_final(n, len(layout.final), prec),
-        events={k: np.zeros(n, dtype=np.int64) for k in layout.events},
-    )
-    groups: dict[str, list[tuple[int, Scene, Any]]] = {}
-    for row, (index, values) in enumerate(members):
-        try:
-            scene = scenes[row] if scenes is not None else study.member_scene(index, values)
-            model = FAMILIES[scene.family].build(scene)
-        except Exception as exc:  # one member's bad numbers must not end the sweep
-            part.message[row] = _reason(exc)
-            continue
-        groups.setdefault(_group_key(model, scene), []).append((row, scene, model))
-    return part, groups
-
-
-def integrate_members(
-    prepared: Prepared,
-    layout: Layout,
-    prec: Precision,
-    threads: int = 1,
-    cancel: threading.Event | None = None,
-) -> Chunk:
-    """The second half of :func:`propagate_members`: integrate the groups and fill the rows.
-
-    ``cancel``, once set, ends the lanes (within a step if a :class:`.lanes.Cancel`); the
-    chunk is then incomplete: the caller drops it.
-    """
-    part, groups = prepared
-    for group in groups.values():
-        terminal = group[0][2].terminal
-        if prec.kind == "double":
-            _lanes_group(group, part, layout, prec, threads, cancel)
-            path = PATH_LANES
-        elif terminal:
-            counters = ", ".join(t.counter for t in terminal)
-            part.why[PATH_RUN] = f"{prec.name} with terminal events ({counters})"
-            _run_group(group, part, layout, prec, threads)
-            path = PATH_RUN
-        else:
-            part.why[PATH_ENSEMBLE] = f"{prec.name}: heyoka's batch integrators are double only"
-            _ensemble_group(group, part, layout, prec, threads)
-            path = PATH_ENSEMBLE
-        part.paths[path] = part.paths.get(path, 0) + len(group)
-    return part
-
-
-# ---------------------------------------------------------------------- internals: running
-def _pipeline(
-    study: Study,
-    indexed: list,
-    layout: Layout,
-    threads: int,
-    size: int,
-    scenes: list[Scene] | None,
-    take: Callable[[Chunk], None],
-) -> None:
-    """Chunk by chunk, building the next chunk's models while the current one integrates:
-    heyoka steps without the GIL, so the Python work of one overlaps the stepping of the other.
-    An exception (Ctrl-C in ``take``'s progress) cancels the chunk in flight (dropped: its
-    members stay NOT_RUN) within a step (:class:`.lanes.Cancel`)."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from ..core import lanes
-
-    prec = study.precision
-    cancel = lanes.Cancel()
-    pending = None
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        try:
-            for part in _split(indexed, size):
-                given = [scenes[i] for i, _ in part] if scenes is not None else None
-                prepared = prepare_members(study, part, layout, given)
-                if pending is not None:
-                    take(pending.result())
-                pending = pool.submit(integrate_members, prepared, layout, prec, threads, cancel)
-            if pending is not None:
-                take(pending.result())
-        except BaseException:
-            cancel.set()
-            raise
-
-
-def _split(items: list, size: int) -> Iterator[list]:
-    for lo in range(0, len(items), size):
-        yield items[lo : lo + size]
-
-
-def _group_key(model: Any, scene: Scene) -> str:
-    from ..core.engine import cache_key
-
-    # A step cap and the step budget are runtime arguments shared by one batch call.
-    options = scene.integrator
-    return f"{cache_key(model, options)}/{options.max_step}/{options.max_steps}"
-
-
-def _reason(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
-
-
-def _record(
-    part: Chunk,
-    row: int,
-    layout: Layout,
-    prec: Precision,
-    values: Mapping[str, np.ndarray],
-    conserved: Sequence[str],
-    complete: bool,
-) -> None:
-    """Fill one member's drifts and final values from its outputs and monitors."""
-    from ..core.result import Result
-
-    reached = len(next(iter(values.values()))) if values else 0
-    monitors = {k: values[k] for k in layout.drift if k in values}
-    probe = Result(t=np.empty(0), variables={}, monitors=monitors, precision=prec)
-    for name in layout.drift:
-        if name not in conserved or name not in values or reached == 0:
-            continue
-        d = np.abs(probe.drift(name))
-        if d.ndim > 1:
-            d = d.max(axis=1)
-        part.drift[name][row, :reached] = d.astype(np.float64)
-    missing = [k for k in layout.drift if k not in conserved]
-    if missing:
-        note = f"; not conserved by this member's flow (drift NaN): {', '.join(missing)}"
-        part.message[row] += note
-    if complete:
-        last = [values[k][-1] if k in values else prec.number("nan") for k in layout.final]
-        if prec.kind == "double":
-            part.final[row] = np.array(last, dtype=np.float64)
-        else:
-            part.final[row] = prec.to_text(prec.array(last))
-
-
-def _run_group(
-    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
-) -> None:
-    """Members whose scenes have terminal events: one ``engine.run`` each."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from ..core import engine
-
-    _, scene0, model0 = group[0]
-    compiled, cached = engine.compile_model(model0, scene0.integrator)  # once, before threads
-    if not cached:
-        part.compile_seconds += compiled.compile_seconds
-
-    def one(item: tuple[int, Scene, Any]) -> None:
-        row, scene, model = item
-        try:
-            result = engine.run(scene)
-        except IntegrationError as exc:
-            result = exc.result
-        except Exception as exc:  # one member's failure must not end the sweep
-            part.message[row] = _reason(exc)
-            return
-        part.status[row] = OK if result.success else FAILED
-        part.message[row] = result.message
-        part.steps[row] = result.counters.get("steps", 0)
-        for name in layout.events:
-            log = result.events.get(name)
-            part.events[name][row] = len(log) if log is not None else 0
-        values = {**result.variables, **result.monitors}
-        _record(part, row, layout, prec, values, model.conserved, result.success)
-
-    with ThreadPoolExecutor(max_workers=max(1, min(threads, len(group)))) as pool:
-        list(pool.map(one, group))
-
-
-def _lanes_group(
-    group: list[tuple[int, Scene, Any]],
-    part: Chunk,
-    layout: Layout,
-    prec: Precision,
-    threads: int,
-    cancel: threading.Event | None = None,
-) -> None:
-    """Members sharing compiled code, in double: batch lanes (each member's own terminal-event
-    handlers acting on its lane)."""
-    from ..core import engine, lanes
-
-    _, scene0, model0 = group[0]
-    compiled, cached = engine.compile_model(model0, scene0.integrator)  # the outputs' evaluator
-    batch, batch_cached = lanes.compile_batch(model0, scene0.integrator)
-    part.compile_seconds += (0 if cached else compiled.compile_seconds) + (
-        0 if batch_cached else batch.compile_seconds
-    )
-    grid = scene0.output.time_grid(prec)
-    initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
-    pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
-    try:
-        with engine.quiet_heyoka():  # a member going non-finite is reported as such
-            runs = lanes.propagate_members(
-                model0,
-                scene0.integrator,
-                grid,
-                initial,
-                pars,
-                threads,
-                cancel,
-                terminal=[model.terminal for _, _, model in group],
-            )
-    except Exception as exc:  # the whole call failed: every member of the group is marked
-        for row, _, _ in group:
-            part.message[row] = _reason(exc)
-        return
-    if cancel is not None and cancel.is_set():
-        return  # the chunk is dropped
-    for (row, _, model), run in zip(group, runs, strict=True):
-        reached = len(run.states)
-        rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
-        values = engine.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
-        complete = run.status == 0
-        part.message[row] = run.message
-        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
-            # As a lone run would: the member stops at its first non-finite output.
-            k, part.message[row] = bad
-            complete = False
-            values = {n: v[:k] for n, v in values.items()}
-        part.status[row] = OK if complete else FAILED
-        part.steps[row] = run.counters["steps"]
-        for name in layout.events:
-            log = run.events.get(name)
-            part.events[name][row] = len(log) if log is not None else 0
-        _record(part, row, layout, prec, values, model.conserved, complete)
-
-
-def _ensemble_group(
-    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
-) -> None:
-    """Members sharing compiled code and without terminal events: heyoka's ensemble."""
-    import heyoka as hy
-
-    from ..core import engine
-
-    _, scene0, model0 = group[0]
-    compiled, cached = engine.compile_model(model0, scene0.integrator)
-    if not cached:
-        part.compile_seconds += compiled.compile_seconds
-    grid = scene0.output.time_grid(prec)
-    held = len(compiled.integrator.pars)
-    starts = [prec.array(model.initial_state) for _, _, model in group]
-    pars = [prec.array(model.pars.values) for _, _, model in group]
-    limit: dict[str, Any] = {"max_steps": scene0.integrator.max_steps}  # the step budget
-    if scene0.integrator.max_step is not None:
-        limit["max_delta_t"] = prec.number(scene0.integrator.max_step)
-
-    def gen(ta: Any, i: int) -> Any:
-        ta.time = grid[0]
-        ta.state[:] = starts[i]
-        ta.pars[:] = pars[i][:held]
-        return ta
-
-    try:
-        runs = hy.ensemble_propagate_grid(
-            compiled.integrator,
-            grid,
-            len(group),
-            gen,
-            algorithm="thread",
-            max_workers=threads,
-            **limit,
-        )
-    except Exception as exc:  # the whole call failed: every member of the group is marked
-        for row, _, _ in group:
-            part.message[row] = _reason(exc)
-        return
-    for i, ((row, _, model), run) in enumerate(zip(group, runs, strict=True)):
-        ta, outcome, nsteps, states = run[0], run[1], run[4], run[-1]
-        reached = len(states)
-        complete = outcome == hy.taylor_outcome.time_limit and reached == len(grid)
-        if complete:
-            part.status[row], part.message[row] = OK, "every output time was reached"
-        else:
-            # heyoka's time is NaN once the state is: name the last output time kept instead.
-            kept = f"t = {grid[reached - 1]}" if reached else "the start"
-            why = {
-                hy.taylor_outcome.err_nf_state: "the state became non-finite",
-                hy.taylor_outcome.step_limit: "the step budget integrator.max_steps was spent",
-            }.get(outcome, f"stopped with outcome {outcome}")
-            part.message[row] = f"{why} after {kept} (the last output time kept)"
-        part.steps[row] = nsteps
-        logs = engine.event_logs(model, ta, prec, None)
-        for name in layout.events:
-            part.events[name][row] = len(logs[name]) if name in logs else 0
-        # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
-        rows = np.array([pars[i].copy() for _ in range(reached)]).reshape(reached, len(pars[i]))
-        values = engine.evaluate_outputs(compiled, model, states, rows, grid[:reached], prec)
-        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
-            # As a lone run would: the member stops at its first non-finite output.
-            k, part.message[row] = bad
-            part.status[row], complete = FAILED, False
-            values = {n: v[:k] for n, v in values.items()}
-        _record(part, row, layout, prec, values, model.conserved, complete)
 
 
 # The public names of a sweep, from the modules that hold them.

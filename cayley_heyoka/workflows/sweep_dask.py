@@ -1,6 +1,6 @@
 """The Dask backend of sweeps: chunks of members as tasks, gathered into one file.
 
-Each task runs :func:`.sweep.propagate_members` on a chunk of members in a worker process,
+Each task runs :func:`.members.propagate_members` on a chunk of members in a worker process,
 the same code as the local backend, so the two give identical arrays. A worker compiles each
 model structure once (the engine's in-memory cache lives as long as the worker process, and
 heyoka's disk cache serves the next process); its chunks then cost a copy of the compiled
@@ -20,8 +20,8 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from .members import propagate_members, reason, split
 from .study import DEFAULT_CHUNK, Member, RunOptions, Study
-from .sweep import _reason, _split, propagate_members
 from .sweep_result import Chunk, Layout
 
 #: Seconds to wait for a scheduler to answer and for its first worker to join.
@@ -40,7 +40,7 @@ def propagate(
     Parameters
     ----------
     study, members, layout
-        As for :func:`.sweep.propagate_members`.
+        As for :func:`.members.propagate_members`.
     run
         ``scheduler`` (None: a LocalCluster of ``workers`` processes), ``chunk``.
     take
@@ -92,7 +92,7 @@ def propagate(
         workers = len(client.scheduler_info()["workers"])
         # Several tasks per worker, so that a slow chunk does not leave the others idle.
         chunk = run.chunk or max(1, min(DEFAULT_CHUNK, math.ceil(len(members) / (4 * workers))))
-        parts = list(_split(list(members), chunk))
+        parts = list(split(list(members), chunk))
         futures = {
             client.submit(propagate_members, study, part, layout, 1, pure=False): part
             for part in parts
@@ -103,7 +103,7 @@ def propagate(
             try:
                 rows = future.result()
             except Exception as exc:  # a task's failure marks its members, not the sweep
-                rows = Chunk.failed(part, layout, prec, f"the Dask task failed: {_reason(exc)}")
+                rows = Chunk.failed(part, layout, prec, f"the Dask task failed: {reason(exc)}")
             take(rows)
             future.release()
     finally:

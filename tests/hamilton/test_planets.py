@@ -27,9 +27,9 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Scene, SceneError, load_scene, run
-from cayley_heyoka.hamilton import planets
-from cayley_heyoka.hamilton import planets_equations as pe
 from cayley_heyoka.hamilton.elements import lagrange_brackets
+from cayley_heyoka.hamilton.predominant_mass import equations as pe
+from cayley_heyoka.hamilton.predominant_mass import system as planets
 from cayley_heyoka.hamilton.scene import MAX_BODIES
 from cayley_heyoka.mechanics.kepler import Elements
 
@@ -203,7 +203,7 @@ def test_elements_vary_slowly_and_the_positions_do_not():
 def test_check_formulations_reports_rows_within_their_bounds():
     """The ready-made check (for ``cayley-heyoka check``): both formulations, ξ and x′ rows
     with the law's bounds, conservation rows for each run."""
-    from cayley_heyoka.hamilton.planets_check import check_formulations
+    from cayley_heyoka.hamilton.predominant_mass.check import check_formulations
 
     report = check_formulations(Scene.from_dict(n5("canonical", orbits(2), 9)))
     assert report.passed, report.text()

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Result, Scene, run
+from cayley_heyoka.core.consistency import CheckReport
 from cayley_heyoka.core.files import DIGEST, seal
-from cayley_heyoka.workflows.checks import CheckReport
 from cayley_heyoka.workflows.reference import WORK_MARKER
 from cayley_heyoka.workflows.sweep_result import load_sweep
 

@@ -53,9 +53,9 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.accuracy import to_mpf
-from ..mechanics import kepler as el
-from ..mechanics.frames import cross, dot
+from ...core.accuracy import to_mpf
+from ...mechanics import kepler as el
+from ...mechanics.frames import cross, dot
 
 __all__ = [
     "HamiltonElements",

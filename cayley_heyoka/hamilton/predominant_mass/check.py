@@ -22,10 +22,10 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.precision import exact_fraction
-from ..core.scene import Scene
-from ..workflows.checks import CheckReport, CheckRow
-from . import planets
+from ...core.consistency import CheckReport, CheckRow
+from ...core.precision import exact_fraction
+from ...core.scene import Scene
+from . import system as planets
 
 
 def check_formulations(scene: Scene) -> CheckReport:
@@ -51,7 +51,7 @@ def check_formulations(scene: Scene) -> CheckReport:
         When a body cannot be given Hamilton's elements (circular, planar or unbound orbits),
         naming it.
     """
-    from ..core.engine import run
+    from ...core.engine import run
 
     if scene.family != "hamiltonian" or scene.model.model != "predominant_mass":
         raise ValueError("scene: needs model = 'predominant_mass'")

@@ -1,7 +1,7 @@
 """A system with one predominant mass as heyoka expressions: (F2.) and Hamilton's elements.
 
 Symbols and the two formulations (Hamilton 1835, Second Essay §31–39; docs/hamilton.md; the numbers
-and the table of elements are in :mod:`.planets`):
+and the table of elements are in :mod:`.system`):
 
 * **canonical** — the state is (ξᵢ, pᵢ = mᵢx′ᵢ) and the equations are the canonical equations
   of H (F2.), taken by heyoka (:func:`canonical_system`);
@@ -27,10 +27,10 @@ from fractions import Fraction
 import heyoka as hy
 import mpmath
 
-from ..core.model import ParTable
-from ..core.precision import Number, Precision, exact_fraction, fraction_text
-from ..mechanics.frames import dot
-from .canonical import canonical_equations
+from ...core.model import ParTable
+from ...core.precision import Number, Precision, exact_fraction, fraction_text
+from ...mechanics.frames import dot
+from ..canonical import canonical_equations
 
 Expr = hy.expression
 
@@ -304,8 +304,8 @@ def element_system(
 
 
 def angular_momentum(xi: Sequence[Sequence[Expr]], p: Sequence[Sequence[Expr]]) -> list[Expr]:
-    """Σ ξᵢ × pᵢ (conserved by (F2.): see :func:`.planets.angular_momentum`)."""
-    from ..mechanics.frames import cross
+    """Σ ξᵢ × pᵢ (conserved by (F2.): see :func:`.system.angular_momentum`)."""
+    from ...mechanics.frames import cross
 
     rows = [cross(list(x), list(q)) for x, q in zip(xi, p, strict=True)]
     return [hy.sum([r[j] for r in rows]) for j in range(3)]

@@ -1,9 +1,9 @@
 """Build the heyoka system of a ``model = "predominant_mass"`` scene, in either formulation.
 
 * ``canonical``: the state is ξᵢ (``x1, y1, z1, …``) and pᵢ = mᵢx′ᵢ (``px1, …``), integrated
-  by the canonical equations of H (F2.) (:func:`.planets_equations.canonical_system`);
+  by the canonical equations of H (F2.) (:func:`.equations.canonical_system`);
 * ``elements``: the state is Hamilton's elements ``mu1, tau1, varpi1, lambda1, chi1, nu1, …``
-  of every body, integrated by (S2.) from one H₂ (:func:`.planets_equations.element_system`);
+  of every body, integrated by (S2.) from one H₂ (:func:`.equations.element_system`);
   ξ and x′ are reported through the undisturbed motion.
 
 Results carry ξᵢ as ``x1, y1, z1`` and the centrobaric velocity x′ᵢ as ``vx1, vy1, vz1`` in
@@ -18,14 +18,14 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
-from ..core.errors import SceneError
-from ..core.model import Model, ParTable
-from ..core.precision import Number, exact_fraction
-from ..core.scene import Scene
-from . import planets
-from . import planets_equations as pe
-from .model import _events, _principal_function, select_monitors
-from .scene import Hamiltonian
+from ...core.errors import SceneError
+from ...core.model import Model, ParTable
+from ...core.precision import Number, exact_fraction
+from ...core.scene import Scene
+from ..outputs import select_monitors, user_events, wants_principal_function
+from ..scene import Hamiltonian
+from . import equations as pe
+from . import system as planets
 
 _GUARD_DIGITS = 15
 # Compiled without compact mode, the element equations (Kepler's equation and the gradient of
@@ -65,7 +65,7 @@ def build_model(scene: Scene) -> Model:
         outputs |= {f"v{a}{i + 1}": v for a, v in zip(_AXES, xprime[i], strict=True)}
     H = pe.hamiltonian(xi, p, c)
     monitors: dict[str, Any] = {"energy": H, "angular_momentum": pe.angular_momentum(xi, p)}
-    if _principal_function(scene):
+    if wants_principal_function(scene):
         # S' = Σ p·ξ̇ − H = 2T − H = T + U, since ξ̇ = ∂H/∂p = p/m + Σp/M.
         S = hy.make_vars("S")
         system.append((S, 2.0 * pe.kinetic_energy(p, c) - H))
@@ -75,7 +75,7 @@ def build_model(scene: Scene) -> Model:
     if "S" in outputs:
         initial.append("0")
     monitors, conserved = select_monitors(scene, monitors, ("energy", "angular_momentum"))
-    events = _events(scene, outputs, pars)
+    events = user_events(scene, outputs, pars)
     return Model(
         "hamiltonian",
         system,
@@ -120,7 +120,7 @@ def initial_state(ham: Hamiltonian, t: Number, dps: int) -> list[str]:
     """The formulation's state at the start time ``t`` as decimal text with ``dps`` digits.
 
     canonical: ξ of every body, then pᵢ = mᵢx′ᵢ; elements: (μ, τ, ϖ, λ, χ, ν) of every body,
-    by the reverse conversion of §8.3 (:func:`.planets.hamilton_elements`). Computed in mpmath
+    by the reverse conversion of §8.3 (:func:`.system.hamilton_elements`). Computed in mpmath
     from the scene's exact numbers, so a real128 or multiprecision run starts exactly.
     """
     with mpmath.workdps(dps):

@@ -1,0 +1,150 @@
+"""Certificates of reference solutions: error bounds, and the ladder of precisions they climb.
+
+A reference is certified either by its closed form (each value's own error bound) or by a
+second run in a higher precision (:func:`difference_certificate`); the certificate holds
+the absolute error of every output and event time, and the largest of them scaled (relative
+above 1). :func:`precision_for` and :func:`next_precision` are the precisions tried.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .evaluation import Rounding
+from .precision import Precision
+
+BITS_PER_DIGIT = math.log2(10)
+
+
+def precision_for(digits: float) -> Precision:
+    """The cheapest precision with ``digits`` significant decimal digits."""
+    bits = math.ceil(digits * BITS_PER_DIGIT) + 1
+    if bits <= 53:
+        return Precision("double")
+    if bits <= 113:
+        return Precision("quad")
+    return Precision("real", 32 * math.ceil(bits / 32))
+
+
+def label(prec: Precision) -> str:
+    """How a precision is named to people: heyoka's ``real128`` is IEEE quad, not MPFR."""
+    names = {"double": "double", "quad": "quad (IEEE binary128)"}
+    return names.get(prec.kind, f"MPFR {prec.bits} bits")
+
+
+def next_precision(prec: Precision) -> Precision:
+    """The next rung of the ladder: at least 32 more bits, or a quarter more."""
+    if prec.kind == "double":
+        return Precision("quad")
+    bits = prec.bits + max(32, prec.bits // 4)
+    return Precision("real", 32 * math.ceil(bits / 32))
+
+
+@dataclass
+class Certificate:
+    """The error bound of a reference solution.
+
+    Attributes
+    ----------
+    method
+        ``"closed form"`` or ``"two precisions"``.
+    compared_with
+        What the solution was compared with (the closed form's name, or the other precision).
+    errors
+        Estimated absolute error of each variable at each output time.
+    event_errors
+        Estimated absolute error of each recorded event's times.
+    scaled
+        The largest error, absolute where |value| ≤ 1 and relative above.
+    worst
+        Where the largest scaled error is: ``(variable, time)``.
+    """
+
+    method: str
+    compared_with: str
+    errors: dict[str, np.ndarray]
+    event_errors: dict[str, np.ndarray] = field(default_factory=dict)
+    scaled: float = 0.0
+    worst: tuple[str, float] = ("", 0.0)
+
+    def digits(self) -> float:
+        """Decimal digits certified: -log10 of the largest scaled error."""
+        return math.inf if self.scaled == 0 else -math.log10(self.scaled)
+
+
+def _scaled(values: np.ndarray, errors: np.ndarray) -> np.ndarray:
+    mag = np.abs(np.asarray(values, dtype=float))
+    return errors / np.maximum(mag, 1.0)
+
+
+def worst(cert: Certificate, values: dict[str, np.ndarray], t: np.ndarray) -> Certificate:
+    best = (0.0, "", 0.0)
+    for name, err in cert.errors.items():
+        s = _scaled(values[name], err)
+        if s.size and np.max(s) > best[0]:
+            k = int(np.argmax(s))
+            best = (float(s[k]), name, float(t[k]))
+    for name, err in cert.event_errors.items():
+        if err.size and np.max(err) > best[0]:
+            best = (float(np.max(err)), f"event {name}", math.nan)
+    cert.scaled, cert.worst = best[0], (best[1], best[2])
+    return cert
+
+
+def difference_certificate(written: Any, other: Any) -> Certificate:
+    """The certificate of ``written`` from a less precise run ``other`` of the same scene."""
+    import mpmath
+
+    errors = {}
+    with mpmath.workdps(written.precision.dps + 5):
+        for name, values in written.variables.items():
+            errors[name] = _abs_difference(
+                values, other.variables[name], written.precision, other.precision
+            )
+        event_errors = {}
+        for name, log in written.events.items():
+            theirs = other.events.get(name)
+            if theirs is None or len(theirs) != len(log) or list(theirs.label) != list(log.label):
+                raise RuntimeError(
+                    f"event {name!r}: {len(log)} occurrences in {written.precision.name}, "
+                    f"{0 if theirs is None else len(theirs)} in {other.precision.name} — the "
+                    "runs disagree on an event (one grazing zero?): no certificate"
+                )
+            event_errors[name] = _abs_difference(
+                log.time, theirs.time, written.precision, other.precision
+            )
+    cert = Certificate("two precisions", other.precision.name, errors, event_errors)
+    return worst(cert, written.variables, np.asarray(written.t, dtype=float))
+
+
+def _abs_difference(a: np.ndarray, b: np.ndarray, pa: Precision, pb: Precision) -> np.ndarray:
+    """|a - b| as float64, the subtraction done in mpmath on the operands' exact values."""
+    fa, fb = exact_values(np.ravel(a), pa), exact_values(np.ravel(b), pb)
+    out = np.array([float(abs(x - y)) for x, y in zip(fa, fb, strict=True)])
+    return out.reshape(np.shape(a))
+
+
+def precision_of(result: Any) -> Precision:
+    """The precision of a result, or of a thinned view of one (which has only the arrays)."""
+    if hasattr(result, "precision"):
+        return result.precision
+    x = np.ravel(result.t)[0]
+    if isinstance(x, float | np.floating):
+        return Precision("double")
+    return Precision("real", x.prec) if hasattr(x, "prec") else Precision("quad")
+
+
+def exact_values(values: Any, prec: Precision) -> list[Any]:
+    """The exact values of numbers of ``prec``, as mpmath numbers (``str`` of a double is its
+    shortest decimal, which is not its value: up to half an ulp off)."""
+    rnd = rounding_of(prec)
+    return [rnd.read(x) for x in prec.to_text(np.asarray(values))]
+
+
+def rounding_of(prec: Precision) -> Rounding:
+    """What the closed-form workers need of a precision."""
+    return Rounding(prec.kind, prec.bits)

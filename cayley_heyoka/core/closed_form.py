@@ -1,0 +1,102 @@
+"""A scene's closed form, as a family offers it (``Family.closed_form``): evaluated as a
+reference solution at the scene's output times, or compared with a run (its certificate).
+
+A family subclasses :class:`ClosedForm` with ``_job`` (what the worker processes of
+:func:`cayley_heyoka.core.evaluation.evaluate` compute), ``certificate`` and, where the scene
+records events the closed form also gives, ``_events``.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .certificate import Certificate, worst
+from .precision import Precision
+from .scene import Scene
+
+
+def with_precision(scene: Scene, prec: Precision, tolerance: str | None) -> Scene:
+    data = scene.to_dict()
+    integ = dict(data.get("integrator", {}))
+    integ["precision"] = prec.to_spec()
+    integ["tolerance"] = "auto" if tolerance is None else tolerance
+    data["integrator"] = integ
+    return Scene.from_dict(data)
+
+
+class ClosedForm:
+    """A scene's closed form: evaluated as the reference, or compared with a run."""
+
+    name = ""
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+
+    def certificate(self, result: Any, digits: int) -> Certificate:
+        raise NotImplementedError
+
+    def job(self, prec: Precision) -> Any:
+        """What workers evaluate to write the scene's outputs in ``prec`` (None: it cannot).
+
+        The names come from the model the integration would build, so that the file holds
+        every output variable and monitor the integrated run would write, and nothing else.
+        """
+        from .families import FAMILIES
+
+        variant = with_precision(self.scene, prec, None)
+        model = FAMILIES[variant.family].build(variant)
+        grid = variant.output.time_grid(prec)
+        return self._job(variant, model, prec, prec.to_text(grid[:1])[0])
+
+    def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
+        raise NotImplementedError
+
+    def evaluate(
+        self, prec: Precision, workers: int | None, progress: Any, store: Path | None = None
+    ) -> tuple[Any, Certificate, int]:
+        """The scene's outputs in ``prec`` from the closed form, their certificate, and the
+        number of chunks read back from ``store`` (see :func:`.reference.evaluate.evaluate`)."""
+        from .evaluation import evaluate
+        from .families import FAMILIES
+        from .result import Result, versions
+
+        wall = time.perf_counter()
+        variant = with_precision(self.scene, prec, None)
+        model = FAMILIES[variant.family].build(variant)
+        grid = variant.output.time_grid(prec)
+        texts = list(prec.to_text(grid))
+        job = self._job(variant, model, prec, texts[0])
+        tick = None
+        if progress is not None:
+            tick = lambda done: progress("closed form", float(grid[done - 1]))  # noqa: E731
+        rows, (events, event_errors), resumed = evaluate(
+            job, texts, workers, tick, lambda: self._events(job, model, prec, grid), store
+        )
+        variables = {
+            n: prec.from_text(np.array([v[n] for v, _ in rows], dtype=object))
+            for n in job.variables
+        }
+        monitors = {
+            n: prec.from_text(np.array([v[n] for v, _ in rows], dtype=object)) for n in job.monitors
+        }
+        result = Result(
+            t=grid,
+            variables=variables,
+            monitors=monitors,
+            conserved=model.conserved,
+            events=events,
+            precision=prec,
+            message="every output time was reached (closed form)",
+            scene=variant.to_dict(),
+            metadata={**versions(), "wall_seconds": time.perf_counter() - wall},
+        )
+        errors = {n: np.array([e[n] for _, e in rows]) for n in job.variables}
+        cert = Certificate("closed form", self.name, errors, event_errors)
+        return result, worst(cert, variables, np.asarray(grid, dtype=float)), resumed
+
+    def _events(self, job: Any, model: Any, prec: Precision, grid: np.ndarray) -> tuple[dict, dict]:
+        return {}, {}

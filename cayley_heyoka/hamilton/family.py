@@ -1,0 +1,18 @@
+"""The Hamiltonian family's record in the registry (:mod:`cayley_heyoka.core.families`)."""
+
+from __future__ import annotations
+
+from ..core.families import Family, later
+from .model import build_model
+from .scene import Hamiltonian
+
+FAMILY = Family(
+    "hamiltonian",
+    "hamiltonian",
+    ("hamiltonian", "initial"),
+    Hamiltonian.parse,
+    build_model,
+    output_keys=("principal_function",),
+    consistency_check=later("cayley_heyoka.hamilton.projectile_check", "check_hamiltonian"),
+    closed_form=later("cayley_heyoka.hamilton.projectile_reference", "closed_form"),
+)

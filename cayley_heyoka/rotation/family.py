@@ -1,0 +1,17 @@
+"""The rotation family's record in the registry (:mod:`cayley_heyoka.core.families`)."""
+
+from __future__ import annotations
+
+from ..core.families import Family, later
+from .model import build_model
+from .scene import RigidBody
+
+FAMILY = Family(
+    "rotation",
+    "body",
+    ("body", "initial", "attitude", "forces"),
+    RigidBody.parse,
+    build_model,
+    consistency_check=later("cayley_heyoka.rotation.closed_form_check", "check_rotation"),
+    closed_form=later("cayley_heyoka.rotation.free_body_reference", "closed_form"),
+)
