@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 # session of an environment that has cayley_heyoka installed, imports this package, and
 # importing heyoka costs ~0.4 s.
 _EXPORTS = {
-    "clear_cache": "core.engine",
-    "compile_model": "core.engine",
+    "clear_cache": "core.compiler",
+    "compile_model": "core.compiler",
     "run": "core.engine",
     "EnsembleError": "workflows.ensemble",
     "EnsembleResult": "workflows.ensemble",
@@ -44,7 +44,8 @@ _EXPORTS = {
 _MODULES = {"plots": "workflows.plots"}
 
 if TYPE_CHECKING:
-    from .core.engine import clear_cache, compile_model, run
+    from .core.compiler import clear_cache, compile_model
+    from .core.engine import run
     from .core.errors import IntegrationError, Interrupted, SceneError
     from .core.files import OutputError, ResultFileError
     from .core.precision import Precision

@@ -16,7 +16,7 @@ import pytest
 from helpers import free_body
 
 import cayley_heyoka as ch
-from cayley_heyoka.core import engine
+from cayley_heyoka.core import compiler, engine
 from cayley_heyoka.core.errors import IntegrationError, Interrupted, SceneError
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -382,7 +382,7 @@ def test_an_integrator_handed_back_keeps_no_reference_to_its_run():
     scene = ch.Scene.from_dict(free_body(attitude={"formulation": "rodrigues"}))
     result = ch.run(scene)
     assert result.counters["rebasings"] > 0
-    compiled, cached = engine.compile_model(engine.model_of(scene), scene.integrator)
+    compiled, cached = compiler.compile_model(engine.model_of(scene), scene.integrator)
     assert cached and compiled.spare
     for ta in compiled.spare:
         assert all(ev.callback.target is None for ev in ta.t_events)

@@ -26,7 +26,7 @@ def test_systems_differing_deep_inside_long_expressions_do_not_share_code():
 def test_compact_mode_rule():
     """'auto' compiles compact in extended precision, for models that ask, and for large
     systems (validation/BENCHMARKS.md, 'setup'); the scene's explicit choice wins."""
-    from cayley_heyoka.core.engine import COMPACT_THRESHOLD, use_compact_mode
+    from cayley_heyoka.core.compiler import COMPACT_THRESHOLD, use_compact_mode
     from cayley_heyoka.core.families import FAMILIES
 
     def decide(precision, compact="auto"):

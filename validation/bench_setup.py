@@ -38,7 +38,7 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka.core import engine, lanes
+from cayley_heyoka.core import compiler, lanes
 from cayley_heyoka.core.families import FAMILIES
 from cayley_heyoka.workflows import ensemble as ens
 
@@ -165,7 +165,7 @@ def fresh_disk_cache() -> Iterator[Path]:
 
 def forget_compiled() -> None:
     """Our template cache and heyoka's in-memory cache (not its disk cache)."""
-    engine.clear_cache()
+    compiler.clear_cache()
     ens.clear_cache()
     hy.llvm_state.clear_memcache()
 
@@ -176,7 +176,7 @@ def cold_compile(scene: ch.Scene) -> tuple[Any, Any, float, float]:
     forget_compiled()
     model = FAMILIES[scene.family].build(scene)
     w0, c0 = time.perf_counter(), time.process_time()
-    compiled, cached = engine.compile_model(model, scene.integrator)
+    compiled, cached = compiler.compile_model(model, scene.integrator)
     w1, c1 = time.perf_counter(), time.process_time()
     assert not cached
     return model, compiled, w1 - w0, c1 - c0
@@ -242,7 +242,7 @@ def compile_sweep(quick: bool) -> list[Point]:
                     integrators[compact] = ta
                 init = np.array(model.initial_state, dtype=float)
                 cost = step_costs(integrators, init, repeats=2 if quick else 5)
-                auto = model.compact or model.size() > engine.COMPACT_THRESHOLD
+                auto = model.compact or model.size() > compiler.COMPACT_THRESHOLD
                 points.append(
                     Point(
                         fam.label,
@@ -358,7 +358,7 @@ def plot_compile(points: list[Point], path: Path) -> bool:
         ax.loglog(s, [p.cpu[True] for p in pts], "o--", color=colour, mfc="none")
         bx.semilogx(s, [p.ratio for p in pts], "o-", color=colour, label=fam.label)
     for a in (ax, bx):
-        a.axvline(engine.COMPACT_THRESHOLD / 1e3, color="grey", lw=0.8, ls=":")
+        a.axvline(compiler.COMPACT_THRESHOLD / 1e3, color="grey", lw=0.8, ls=":")
         a.set_xlabel("Model.size() (kB of pickled right-hand sides)")
         a.grid(True, which="both", alpha=0.3)
     ax.axhline(PATIENCE, color="grey", lw=0.8)
@@ -447,10 +447,10 @@ def cache_table(quick: bool) -> list[str]:
             entries.append(("only numbers differ (μ, J₂, masses, state)", r, w))
             r, w = _timed_run(other)
             entries.append(("one more term or body (another structure)", r, w))
-            engine.clear_cache()
+            compiler.clear_cache()
             r, w = _timed_run(scene)
             entries.append(("template cache cleared, heyoka's memory cache warm", r, w))
-            engine.clear_cache()
+            compiler.clear_cache()
             hy.llvm_state.clear_memcache()
             r, w = _timed_run(scene)
             entries.append(("both cleared, heyoka's disk cache warm", r, w))
@@ -590,7 +590,7 @@ def _heyoka_ensemble(system: System, X: np.ndarray, batch: bool) -> tuple[np.nda
         template = lanes.compile_batch(model, system.scene.integrator)[0].integrator
         width = template.batch_size
     else:
-        template = engine.compile_model(model, system.scene.integrator)[0].integrator
+        template = compiler.compile_model(model, system.scene.integrator)[0].integrator
         width = 1
     n = len(X)
     padded = np.vstack([X, np.repeat(X[-1:], (-n) % width, axis=0)])
@@ -775,7 +775,7 @@ def run(quick: bool, figures: Path) -> str:
         "seconds, the compile's own work (on a shared machine the wall time also counts "
         "waiting for a core). *Break-even* is the number of steps after which non-compact code "
         "has paid for its longer compile; *auto* is the current automatic choice (threshold "
-        f"{engine.COMPACT_THRESHOLD / 1e3:.0f} kB, or the model's own request).",
+        f"{compiler.COMPACT_THRESHOLD / 1e3:.0f} kB, or the model's own request).",
         "",
         "| family | size parameter | size (kB) | decomp. | non-compact compile, s (CPU) | "
         "compact compile, s (CPU) | non-compact ns/step | compact ns/step | ratio | "
@@ -803,7 +803,7 @@ def run(quick: bool, figures: Path) -> str:
             "",
             f"Recommended automatic threshold: ≈ {recommended / 1e3:.0f} kB of `Model.size()`, "
             f"where the pooled fit reaches {PATIENCE:.0f} s of cold compile (current: "
-            f"{engine.COMPACT_THRESHOLD / 1e3:.0f} kB). Below it a non-compact compile is a "
+            f"{compiler.COMPACT_THRESHOLD / 1e3:.0f} kB). Below it a non-compact compile is a "
             "wait of seconds, paid once per structure and machine (the disk cache serves every "
             "later process), against steps that are cheaper on every run; above it the wait "
             "grows faster than the size while the step advantage shrinks.",

@@ -150,7 +150,7 @@ def _with(data: dict, precision: str, tolerance: str, times: list) -> ch.Scene:
 class Stepper:
     """``run``'s compiled integrator, stepped over the scene's span without ``run``'s fixed cost.
 
-    The same template integrator ``run`` copies (``engine.compile_model``), the same call
+    The same template integrator ``run`` copies (``compiler.compile_model``), the same call
     (one ``propagate_grid`` over the output times, terminal events handled inside it) and the
     same event handling (the family's handlers: chart re-basings, revolutions of ρ); left out
     is what ``run`` does around them — building the model, the cache lookup, the copy of the

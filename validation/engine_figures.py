@@ -33,7 +33,7 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka.core.engine import compile_model
+from cayley_heyoka.core.compiler import compile_model
 from cayley_heyoka.core.families import FAMILIES
 
 ROOT = Path(__file__).resolve().parent.parent

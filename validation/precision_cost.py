@@ -17,7 +17,7 @@ from pathlib import Path
 import heyoka as hy
 
 import cayley_heyoka as ch
-from cayley_heyoka.core import engine
+from cayley_heyoka.core import compiler
 from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.core.scene import IntegratorOptions
 
@@ -42,7 +42,7 @@ def main() -> None:
     print("| bits | run() incl. compile (s) | steps |")
     print("|---|---|---|")
     for bits in args.bits:
-        engine.clear_cache()
+        compiler.clear_cache()
         hy.llvm_state.clear_memcache()
         t0 = time.perf_counter()
         result = ch.run(scene_at(bits))

@@ -37,7 +37,7 @@ import heyoka as hy
 import numpy as np
 
 import cayley_heyoka as ch
-from cayley_heyoka.core.engine import compile_model
+from cayley_heyoka.core.compiler import compile_model
 from cayley_heyoka.core.families import FAMILIES
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -65,7 +65,7 @@ def _interruptible() -> Iterator[None]:
 
 @contextlib.contextmanager
 def compiling() -> Iterator[None]:
-    """:func:`~cayley_heyoka.core.engine.signals_end_compilation` for a command that integrates.
+    """:func:`~cayley_heyoka.core.signals.signals_end_compilation` for a command that integrates.
 
     Entered by the command, not by :func:`main`: the engine imports heyoka, which the commands
     that do not integrate (and ``--help``) never load.
@@ -73,7 +73,7 @@ def compiling() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield  # the signals are the main thread's (and the engine's switch is process-wide)
         return
-    from ..core.engine import signals_end_compilation
+    from ..core.signals import signals_end_compilation
 
     with signals_end_compilation():
         yield

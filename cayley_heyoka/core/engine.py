@@ -17,229 +17,28 @@ uninterrupted run up to there.
 
 from __future__ import annotations
 
-import contextlib
-import copy
-import hashlib
 import math
-import queue
-import re
-import signal
-import threading
 import time
 import warnings
 import weakref
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from collections.abc import Callable
 from fractions import Fraction
 from typing import Any
 
 import heyoka as hy
 import numpy as np
 
+from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Model, own_terminal
 from .precision import Precision, exact_fraction
-from .result import EventLog, Result, versions
-from .scene import IntegratorOptions, Scene
+from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
+from .result import Result, versions
+from .scene import Scene
+from .signals import WORKER, DeferredSignals
 
 Progress = Callable[[float], None]
-
-#: Above this many bytes of serialised right-hand sides (:meth:`Model.size`), compile in compact
-#: mode. Measured (validation/BENCHMARKS.md, "setup", four families): non-compact compile time
-#: grows like size^1.16 and reaches ~10 s at ~140 kB, while compact mode compiles in 0.2–1.5 s
-#: and its step cost falls from 1.4–2.5× (below 100 kB) to 0.9–1.4× (above 200 kB).
-COMPACT_THRESHOLD = 140_000
-
-
-def use_compact_mode(model: Model, options: IntegratorOptions) -> bool:
-    """Whether ``model`` is compiled in compact mode under ``options``.
-
-    The scene's ``integrator.compact_mode`` decides when given; "auto" chooses compact mode
-    for extended precisions (non-compact real128 code took 8–14 s to compile where compact
-    took 0.7–0.9 s, at the same step cost; MPFR code is larger still), for models that ask
-    for it (:attr:`Model.compact`), and above :data:`COMPACT_THRESHOLD`.
-    """
-    if options.compact_mode is not None:
-        return options.compact_mode
-    return options.precision.kind != "double" or model.compact or model.size() > COMPACT_THRESHOLD
-
-
-class Spares:
-    """Integrators of one compiled structure that finished runs handed back, for reuse.
-
-    Resetting one costs microseconds where copying the template cost 0.3–1 ms, most of a short
-    run. A reused integrator steps as a copy of the template does: heyoka chooses each step
-    from the current Taylor coefficients alone, and carries nothing else from a propagation to
-    the next but event cooldowns and the records our callbacks keep (both reset by
-    :meth:`take`). Needs ``integrator`` (the template) and ``spare`` (a list).
-    """
-
-    integrator: Any
-    spare: list[Any]
-
-    def take(self) -> Any:
-        """An integrator of this structure that no one else is using, its event records
-        empty and its cooldowns reset; time, state and parameters are the caller's to set."""
-        try:
-            ta = self.spare.pop()  # atomic: threads never get the same one
-        except IndexError:
-            return copy.deepcopy(self.integrator)
-        if ta.with_events:
-            for ev in ta.nt_events:
-                ev.callback.clear()
-            ta.reset_cooldowns()
-        return ta
-
-    def give(self, ta: Any) -> None:
-        """Hand back an integrator from :meth:`take` that its run no longer uses."""
-        if len(self.spare) < _SPARE:
-            self.spare.append(ta)
-
-
-@dataclass
-class Compiled(Spares):
-    """A template integrator and the evaluator of outputs and monitors for one model structure
-    (with the integrators finished runs handed back: :class:`Spares`)."""
-
-    integrator: Any
-    evaluator: Any
-    compile_seconds: float
-    spare: list[Any] = field(default_factory=list)
-    #: Indices of the parameters the right-hand sides use (see :class:`_Watch`).
-    rhs_pars: list[int] = field(default_factory=list)
-
-
-#: Integrators kept for reuse per compiled structure (one per thread that runs it at once).
-_SPARE = 8
-
-
-_CACHE: dict[str, Compiled] = {}
-
-#: Largest estimated memory of a run's recorded rows (output times × (state + parameters +
-#: outputs + monitors) numbers); the results, their evaluation and the saved file need a few
-#: times this again, so a run above it would exhaust an ordinary machine.
-MAX_RECORD_BYTES = 2**30
-
-
-def clear_cache() -> None:
-    """Forget every compiled integrator (for measuring compile time)."""
-    _CACHE.clear()
-
-
-def cache_size() -> int:
-    """Number of compiled model structures held in memory."""
-    return len(_CACHE)
-
-
-#: heyoka's name of the time in an expression's text (no state variable is named t).
-_TIME = re.compile(r"\bt\b")
-
-
-def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, bool]:
-    """The compiled integrator for ``model``, from the cache when possible.
-
-    Returns the compiled object and whether it came from the cache.
-    """
-    key = cache_key(model, options)
-    hit = _CACHE.get(key)
-    if hit is not None:
-        return hit, True
-    # (Only before compiling: a cached structure has passed it.)
-    for e in model.events:
-        if not hy.get_variables(e.expression) and not _TIME.search(str(e.expression)):
-            # heyoka refuses such an event function ("cannot be constants or parameters").
-            raise SceneError(
-                f"events.{e.name}.expression",
-                f"is constant ({e.expression}): an event needs the state or t to cross zero",
-            )
-    with _signals_end_process(), quiet_heyoka():
-        compiled = _compile(model, options)
-    _CACHE[key] = compiled
-    return compiled, False
-
-
-@contextlib.contextmanager
-def signals_end_compilation() -> Iterator[None]:
-    """Within this context, SIGINT or SIGTERM during an LLVM compilation ends the process.
-
-    LLVM compiles in C++ without returning to Python, so Python's handlers (Ctrl-C's
-    KeyboardInterrupt) would run only when it is done — after seconds or minutes. Nothing is
-    computed before the compilation, so for a command-line process ending at once loses
-    nothing; the signals get their default disposition while compiling, Python's handlers
-    back afterwards. Only in the main thread.
-    """
-    global _END_ON_SIGNAL
-    _END_ON_SIGNAL += 1
-    try:
-        yield
-    finally:
-        _END_ON_SIGNAL -= 1
-
-
-_END_ON_SIGNAL = 0
-_SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-
-@contextlib.contextmanager
-def _signals_end_process() -> Iterator[None]:
-    if not _END_ON_SIGNAL or threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = {sig: signal.signal(sig, signal.SIG_DFL) for sig in _SIGNALS}
-    try:
-        yield
-    finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
-
-
-@contextlib.contextmanager
-def quiet_heyoka() -> Iterator[None]:
-    """heyoka's ``[warning]`` log lines off (their cases are reported as errors of ours)."""
-    hy.set_logger_level_error()
-    try:
-        yield
-    finally:
-        hy.set_logger_level_warning()  # heyoka's default
-
-
-def _compile(model: Model, options: IntegratorOptions) -> Compiled:
-    t0 = time.perf_counter()
-    prec = options.precision
-    compact = use_compact_mode(model, options)
-    kw = prec.heyoka_kwargs
-    ev_kw = {"fp_type": kw["fp_type"]} if kw else {}
-    nt_events = [
-        hy.nt_event(e.expression, _Recorder(), direction=_direction(e.direction), **ev_kw)
-        for e in model.events
-    ]
-    t_events = [
-        hy.t_event(
-            e.expression, direction=_direction(e.direction), callback=TerminalCallback(i), **ev_kw
-        )
-        for i, e in enumerate(model.terminal)
-    ]
-    extra = {}
-    if options.tolerance is not None:
-        extra["tol"] = prec.number(options.tolerance)
-    ta = hy.taylor_adaptive(
-        model.system,
-        prec.array(model.initial_state),
-        pars=prec.array(model.pars.values[: model.integrator_parameters()]),
-        compact_mode=compact,
-        high_accuracy=options.high_accuracy,
-        nt_events=nt_events,
-        t_events=t_events,
-        **extra,
-        **kw,
-    )
-    outputs = _flat_outputs(model)
-    evaluator = hy.cfunc(
-        [e for _, e in outputs], [v for v, _ in model.system], compact_mode=compact, **kw
-    )
-    rhs_pars = sorted(int(str(p)[1:]) for p in hy.get_params([rhs for _, rhs in model.system]))
-    return Compiled(ta, evaluator, time.perf_counter() - t0, rhs_pars=rhs_pars)
 
 
 def run(scene: Scene, progress: Progress | None = None) -> Result:
@@ -354,8 +153,8 @@ class Propagation:
             self._pars = prec.array(model.pars.values)
         check_fits(scene, model)
         self.grid = scene.output.time_grid(prec)
-        _require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
-        _require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")
+        require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
+        require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")
         self.compiled, self._cached = compile_model(model, scene.integrator)
         first = evaluate_outputs(
             self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
@@ -364,14 +163,14 @@ class Propagation:
             if name in model.unbounded:
                 continue
             kind = "monitors" if name in model.monitors else "outputs"
-            _require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
+            require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
         self._initial = initial
         self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)
         ta.pars[:] = self._pars[: self._held]
-        self._signals = _DeferredSignals(self._stop_stepping)
+        self._signals = DeferredSignals(self._stop_stepping)
         self._callback = _ProgressCallback(progress, self._signals) if progress else None
-        # Whether a signal stops heyoka by poisoning the parameters (see _Watch), set per call
+        # Whether a signal stops heyoka by poisoning the parameters (see Watch), set per call
         # of advance().
         self._poisoning = False
         # Runtime only: a step cap changes no compiled code, so it shares the cached integrator.
@@ -438,7 +237,7 @@ class Propagation:
                         # without a thread; a run that needs no more ends with it.
                         self._propagate(until, end, budget, states, pars_rows, calls=1)
                     if self.status == 0 and (self.done < end or self._ta.time < until):
-                        _WORKER.run(
+                        WORKER.run(
                             lambda: self._propagate(until, end, budget, states, pars_rows),
                             self._stop_stepping,
                         )
@@ -454,7 +253,7 @@ class Propagation:
         return state, pars
 
     def _can_poison(self) -> bool:
-        """Whether a signal can stop heyoka without a per-step callback (:class:`_Watch`)."""
+        """Whether a signal can stop heyoka without a per-step callback (:class:`Watch`)."""
         return (
             self._callback is None
             and self.precision.kind == "double"
@@ -462,7 +261,7 @@ class Propagation:
         )
 
     def _stop_stepping(self) -> None:
-        """Called in the main thread when a signal is noted: with :class:`_Watch`, make the
+        """Called in the main thread when a signal is noted: with :class:`Watch`, make the
         next step non-finite, so that heyoka returns after the last whole step."""
         ta = self._ta
         if self._poisoning and ta is not None:
@@ -513,7 +312,7 @@ class Propagation:
             # A call that returned mid-stretch could not be resumed without changing bits
             # (heyoka starts each call with a step to its first point, and the double-length
             # time is not a grid point), so a signal ends the call after a whole step: by
-            # poisoning the parameters (_Watch), or else by a callback after each step.
+            # poisoning the parameters (Watch), or else by a callback after each step.
             callback = self._callback
             if callback is None and self._signals.active and not self._poisoning:
                 callback = self._signals.callback
@@ -792,45 +591,6 @@ def _ending_at(prec: Precision, points: np.ndarray, t: Any) -> np.ndarray:
     return prec.array([*points, t])
 
 
-class _Recorder:
-    """Non-terminal event callback: remembers each occurrence's time and direction."""
-
-    def __init__(self) -> None:
-        self.times: list[Any] = []
-        self.directions: list[int] = []
-
-    def __call__(self, ta: Any, t: Any, d_sgn: int) -> None:
-        self.times.append(t)
-        self.directions.append(int(d_sgn))
-
-    def clear(self) -> None:
-        self.times.clear()
-        self.directions.clear()
-
-
-class TerminalCallback:
-    """The callback of a terminal event: hands the event to ``target(index, integrator)``
-    (a batch integrator's: ``target(index, integrator, lane)``), which returns whether the
-    integration (the lane) goes on.
-
-    The engine points ``target`` at the run using the integrator
-    (:meth:`Propagation._on_terminal`; the lanes at :mod:`.lanes`'s). heyoka copies an
-    integrator's callbacks with it; a copy starts without a target (it serves another run).
-    """
-
-    def __init__(self, index: int) -> None:
-        self.index = index
-        self.target: Callable[..., bool] | None = None
-
-    def __deepcopy__(self, memo: dict) -> TerminalCallback:
-        return TerminalCallback(self.index)
-
-    def __call__(self, ta: Any, d_sgn: Any, *lane: int) -> bool:
-        if self.target is None:
-            raise RuntimeError("a terminal event reached with no run to handle it")
-        return self.target(self.index, ta, *lane)
-
-
 def pass_rows(rows: np.ndarray, given: list[np.ndarray], t: Any, pars: np.ndarray) -> None:
     """Give the output rows up to ``t`` (a terminal event's time; increasing ``rows``, the
     first ``len(given)`` already given) a copy of ``pars``: they were computed before the
@@ -840,7 +600,7 @@ def pass_rows(rows: np.ndarray, given: list[np.ndarray], t: Any, pars: np.ndarra
 
 
 class _ProgressCallback:
-    def __init__(self, progress: Progress, signals: _DeferredSignals) -> None:
+    def __init__(self, progress: Progress, signals: DeferredSignals) -> None:
         self.progress = progress
         self.signals = signals
 
@@ -867,280 +627,3 @@ class _HeldProgress:
         for t in self.times:
             self.callback.progress(t)
         self.times.clear()
-
-
-class _DeferredSignals:
-    """Within the context (in the main thread), SIGINT and SIGTERM handled by Python are only
-    noted (and ``on_signal`` called); the propagation then ends after the current step.
-
-    Python runs a signal's handler only between bytecodes of the main thread, so while heyoka
-    steps there nothing would note it. Two ways out: a Python callback after each step
-    (:meth:`callback`: it cost 6–18 % of the wall time of cheap double steps, the free body's
-    ~1 µs, nothing measurable in quad), or heyoka stepping in another thread while the main
-    thread waits in Python (:class:`_Watch`, double precision: no cost measurable,
-    ``python validation/interrupt_cost.py``).
-    """
-
-    def __init__(self, on_signal: Callable[[], None] | None = None) -> None:
-        self.received = ""
-        self.on_signal = on_signal
-        self._old: dict[int, Any] = {}
-
-    @property
-    def active(self) -> bool:
-        """Whether signals are being noted (the context is entered in the main thread)."""
-        return bool(self._old)
-
-    def callback(self, ta: Any) -> bool:
-        return not self.received
-
-    def _note(self, signum: int, frame: Any) -> None:
-        self.received = signal.Signals(signum).name
-        if self.on_signal is not None:
-            self.on_signal()
-
-    def __enter__(self) -> _DeferredSignals:
-        if threading.current_thread() is threading.main_thread():
-            for sig in _SIGNALS:
-                old = signal.getsignal(sig)
-                if callable(old):  # SIG_DFL and SIG_IGN keep their meaning
-                    self._old[sig] = signal.signal(sig, self._note)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, handler in self._old.items():
-            signal.signal(sig, handler)
-        self._old.clear()
-
-
-class _Watch:
-    """Propagations of the main thread run here, in one long-lived thread, while the main
-    thread waits in Python, where its signal handlers run at once.
-
-    A noted signal then sets the parameters that the right-hand sides use to NaN: the step
-    under way becomes non-finite, and heyoka returns the outputs of the whole steps before it
-    (``err_nf_state``; the rows it returns are the uninterrupted run's). The engine restores
-    the parameters and reports the interruption. No callback runs after each step, so an
-    uninterrupted run costs what a run in any other thread does (measured:
-    ``python validation/interrupt_cost.py``). Double precision with runtime parameters only;
-    other runs keep the per-step callback.
-    """
-
-    def __init__(self) -> None:
-        self._jobs: queue.SimpleQueue = queue.SimpleQueue()
-        self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
-
-    def run(self, job: Callable[[], None], stop: Callable[[], None]) -> None:
-        """Run ``job`` in the watch's thread and wait for it; re-raise what it raised.
-
-        ``stop`` is called if the wait itself is interrupted (an exception raised by another
-        signal handler): the job is stopped and waited for before the exception goes on, so
-        that nothing steps the integrator behind the caller's back.
-        """
-        with self._lock:
-            if self._thread is None or not self._thread.is_alive():
-                self._thread = threading.Thread(
-                    target=self._serve, name="cayley_heyoka-propagation", daemon=True
-                )
-                self._thread.start()
-        done, box = threading.Event(), {}
-        self._jobs.put((job, done, box))
-        try:
-            while not done.wait(0.25):
-                pass
-        except BaseException:
-            stop()
-            done.wait()
-            raise
-        if "error" in box:
-            raise box["error"]
-
-    def _serve(self) -> None:
-        while True:
-            job, done, box = self._jobs.get()
-            try:
-                job()
-            except BaseException as exc:  # handed to the waiting caller
-                box["error"] = exc
-            finally:
-                done.set()
-
-
-_WORKER = _Watch()
-
-
-def check_fits(scene: Scene, model: Model) -> None:
-    """Refuse a run whose recorded rows would exceed :data:`MAX_RECORD_BYTES`, or whose
-    ``max_step`` needs more steps than ``integrator.max_steps`` to cover its span."""
-    options, output = scene.integrator, scene.output
-    prec = options.precision
-    width = 1 + len(model.system) + len(model.pars) + len(_flat_outputs(model))
-    # heyoka's MPFR numbers hold their limbs outside the array.
-    size = {"double": 8, "quad": 16}.get(prec.kind) or 32 + 8 * math.ceil(prec.bits / 64)
-    need = output.count * width * size
-    if need > MAX_RECORD_BYTES:
-        raise SceneError(
-            "output.times",
-            f"{output.count} output times of {width} numbers ({prec.name}, {size} bytes each) "
-            f"need ~{need / 2**30:.3g} GiB, more than {MAX_RECORD_BYTES / 2**30:.3g} GiB; "
-            "record fewer times",
-        )
-    if options.max_step is not None:
-        start, stop = output.span()
-        steps = (exact_fraction(stop) - exact_fraction(start)) / exact_fraction(options.max_step)
-        if steps > options.max_steps:
-            raise SceneError(
-                "integrator.max_step",
-                f"{options.max_step} needs at least {float(Fraction(steps)):.3g} steps from "
-                f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
-                f"{options.max_steps}",
-            )
-
-
-def _require_finite(values: np.ndarray, names: list[str], what: str) -> None:
-    bad = np.flatnonzero(~np.isfinite(values))
-    if len(bad):
-        i = int(bad[0])
-        raise SceneError(
-            names[i], f"the {what} is {values[i]} at the start: it must be finite to integrate"
-        )
-
-
-def first_nonfinite(
-    model: Model, values: dict[str, np.ndarray], times: np.ndarray
-) -> tuple[int, str] | None:
-    """The first row at which an output or monitor of ``values`` is not finite, and the
-    message of the stop there; None if every value is finite."""
-    first = None
-    for name, value in values.items():
-        if name in model.unbounded:
-            # Infinite (or 0/0) at a half-turn, rightly; a state gone NaN shows in the others.
-            continue
-        rows = np.asarray(value).reshape(len(value), -1)
-        bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
-        if len(bad) and (first is None or bad[0] < first[0]):
-            first = (int(bad[0]), name)
-    if first is None:
-        return None
-    k, name = first
-    kind = "monitor" if name in model.monitors else "output"
-    return k, f"the {kind} {name} became non-finite at t = {times[k]}; results kept up to there"
-
-
-def event_direction(spec: Any) -> Any:
-    """heyoka's direction of an :class:`EventSpec` or :class:`TerminalSpec`."""
-    return _direction(spec.direction)
-
-
-def _direction(d: int) -> Any:
-    return {
-        0: hy.event_direction.any,
-        1: hy.event_direction.positive,
-        -1: hy.event_direction.negative,
-    }[d]
-
-
-def cache_key(model: Model, options: IntegratorOptions) -> str:
-    """The key of ``model``'s compiled code: equal keys share one compiled integrator."""
-    text = "\n".join(
-        [
-            model.code_key,
-            options.precision.name,
-            str(options.tolerance),
-            str(options.compact_mode),
-            str(options.high_accuracy),
-        ]
-    )
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _flat_outputs(model: Model) -> list[tuple[str, Any]]:
-    flat = [(k, v) for k, v in model.outputs.items()]
-    for k, v in model.monitors.items():
-        if isinstance(v, list):
-            flat += [(f"{k}[{i}]", e) for i, e in enumerate(v)]
-        else:
-            flat.append((k, v))
-    return flat
-
-
-def evaluate_outputs(
-    compiled: Compiled,
-    model: Model,
-    state: np.ndarray,
-    pars: np.ndarray,
-    times: np.ndarray,
-    prec: Precision,
-) -> dict[str, np.ndarray]:
-    """The model's outputs and monitors from states recorded by ``compiled``'s integrator.
-
-    Parameters
-    ----------
-    compiled
-        What :func:`compile_model` returned for ``model``.
-    state
-        States, shape ``(n, len(model.system))``, one row per time.
-    pars
-        The whole parameter vector at each time, shape ``(n, len(model.pars))``.
-    times
-        The ``n`` times.
-    prec
-        The precision of the arrays.
-
-    Returns
-    -------
-    dict
-        Each output and monitor by name: shape ``(n,)``, or ``(n, k)`` for a k-vector monitor.
-    """
-    evaluator = compiled.evaluator
-    n = len(state)
-    if n == 0:
-        rows = np.empty((len(_flat_outputs(model)), 0))
-    else:
-        kwargs: dict[str, Any] = {"time": np.ascontiguousarray(times)}
-        if evaluator.nparams:
-            kwargs["pars"] = np.ascontiguousarray(pars[:, : evaluator.nparams].T)
-        rows = evaluator(np.ascontiguousarray(state.T), **kwargs)
-    out: dict[str, np.ndarray] = {}
-    k = 0
-    for name, value in list(model.outputs.items()) + list(model.monitors.items()):
-        width = len(value) if isinstance(value, list) else 1
-        block = rows[k : k + width]
-        out[name] = block.T.copy() if isinstance(value, list) else block[0].copy()
-        k += width
-    return out
-
-
-def event_logs(
-    model: Model, ta: Any, prec: Precision, stopped_at: tuple | None
-) -> dict[str, EventLog]:
-    """The occurrences recorded by ``ta``'s event callbacks (and a terminal stop), by name."""
-    recorded = ta.nt_events if model.events else []
-    return logs_of(
-        model, [(ev.callback.times, ev.callback.directions) for ev in recorded], prec, stopped_at
-    )
-
-
-def logs_of(
-    model: Model, recorded: list[tuple[list, list]], prec: Precision, stopped_at: tuple | None
-) -> dict[str, EventLog]:
-    """The event logs of ``model`` from each event's recorded (times, directions)."""
-    gathered: dict[str, list[tuple[Any, int, str]]] = {}
-    for spec, (times, directions) in zip(model.events, recorded, strict=True):
-        gathered.setdefault(spec.name, [])
-        gathered[spec.name] += [
-            (t, d, spec.label_for(d)) for t, d in zip(times, directions, strict=True)
-        ]
-    if stopped_at is not None:
-        spec, t, d = stopped_at
-        gathered.setdefault(spec.name, []).append((t, d, spec.label_for(d)))
-    logs = {}
-    for name, items in gathered.items():
-        items.sort(key=lambda x: x[0])
-        logs[name] = EventLog(
-            time=prec.array([x[0] for x in items]) if items else prec.array([]),
-            direction=np.array([x[1] for x in items], dtype=int),
-            label=np.array([x[2] for x in items], dtype=str),
-        )
-    return logs

@@ -41,7 +41,7 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import engine
+from . import compiler, engine, recording
 from .model import Model, TerminalSpec, own_terminal
 from .precision import Precision
 from .result import EventLog
@@ -104,7 +104,7 @@ class _Everything:
                 0,
                 "every output time was reached",
                 counters,
-                engine.logs_of(self.model, events, _DOUBLE, None) if events else {},
+                recording.logs_of(self.model, events, _DOUBLE, None) if events else {},
                 float(end),
                 False,
             )
@@ -136,7 +136,7 @@ class _Finals:
 
 
 @dataclass
-class CompiledBatch(engine.Spares):
+class CompiledBatch(compiler.Spares):
     """A batch integrator template for one model structure, and spares to reuse."""
 
     integrator: Any
@@ -156,7 +156,7 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
     if options.precision.kind != "double":
         raise ValueError("heyoka's batch integrators run in double precision only")
     width = hy.recommended_simd_size()
-    key = f"{engine.cache_key(model, options)}/{width}"
+    key = f"{compiler.cache_key(model, options)}/{width}"
     hit = _CACHE.get(key)
     if hit is not None:
         return hit, True
@@ -165,17 +165,17 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
         if hit is not None:
             return hit, True
         t0 = time.perf_counter()
-        compact = engine.use_compact_mode(model, options)
+        compact = compiler.use_compact_mode(model, options)
         held = model.integrator_parameters()
         nt = [
-            hy.nt_event_batch(e.expression, _LaneRecorder(), direction=engine.event_direction(e))
+            hy.nt_event_batch(e.expression, _LaneRecorder(), direction=compiler.event_direction(e))
             for e in model.events
         ]
         te = [
             hy.t_event_batch(
                 e.expression,
-                direction=engine.event_direction(e),
-                callback=engine.TerminalCallback(i),
+                direction=compiler.event_direction(e),
+                callback=compiler.TerminalCallback(i),
             )
             for i, e in enumerate(model.terminal)
         ]
@@ -320,7 +320,7 @@ class _LaneRecorder:
 
 class Cancel(threading.Event):
     """A cancel flag that also stops the batch calls in flight, as the engine's watch stops a
-    scalar run (:class:`cayley_heyoka.core.engine._Watch`): :meth:`set` makes the parameters of the
+    scalar run (:class:`cayley_heyoka.core.signals.Watch`): :meth:`set` makes the parameters of the
     integrators stepping non-finite, so heyoka returns after its current step instead of at
     the end of a call that may cover a member's whole span. What those calls computed is
     dropped (their members are not finished)."""
@@ -706,7 +706,7 @@ class _Lanes:
         if m.terminal:
             pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
         recorded = list(zip(m.event_times, m.event_directions, strict=True))
-        events = engine.logs_of(self.model, recorded, _DOUBLE, m.stopped_at)
+        events = recording.logs_of(self.model, recorded, _DOUBLE, m.stopped_at)
         return LaneResult(
             states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
         )

@@ -49,7 +49,7 @@ MAX_MAX_STEPS = 10**18
 #: The smallest tolerance accepted, as a fraction of the precision's epsilon.
 TOLERANCE_FLOOR = Fraction(1, 10**6)
 #: Output times at most (10⁷ rows of a 20-number model are 1.6 GB in double); the engine also
-#: bounds the recorded rows' estimated memory (:data:`cayley_heyoka.core.engine.MAX_RECORD_BYTES`).
+#: bounds the recorded rows' estimated memory (:data:`.recording.MAX_RECORD_BYTES`).
 MAX_OUTPUT_TIMES = 10**7
 #: Largest scene file read (a list of 10⁷ output times as text is ~200 MB; nothing else is big).
 MAX_SCENE_BYTES = 256 * 2**20

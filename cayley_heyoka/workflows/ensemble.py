@@ -59,7 +59,7 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from ..core import engine, lanes
+from ..core import compiler, lanes
 from ..core.families import FAMILIES
 from ..core.model import Model
 from ..core.precision import Number, Precision
@@ -231,7 +231,7 @@ def propagate_ensemble(
 
     if mode == "batch":
         return _lanes(model, options, states, start, end, workers)
-    compiled, cached = engine.compile_model(model, options)
+    compiled, cached = compiler.compile_model(model, options)
     template, compile_seconds = compiled.integrator, 0.0 if cached else compiled.compile_seconds
     pars = prec.array(model.pars.values[: model.integrator_parameters()])
     limit: dict[str, Any] = {"max_steps": options.max_steps}  # the step budget, per member
@@ -311,7 +311,7 @@ def _lanes(
     pars = np.asarray(model.pars.values, dtype=float)
     grid = np.array([start, end], dtype=float)
     t0 = time.perf_counter()
-    with engine.quiet_heyoka():
+    with compiler.quiet_heyoka():
         finals = lanes.propagate_members(
             model,
             options,

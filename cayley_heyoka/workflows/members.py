@@ -11,7 +11,7 @@
   start time set on a copy of the compiled integrator (run()'s bits); one with terminal events
   through :func:`cayley_heyoka.run`, since their handlers cannot run inside heyoka's ensemble;
 * monitors are evaluated from the recorded states
-  (:func:`cayley_heyoka.core.engine.evaluate_outputs`).
+  (:func:`cayley_heyoka.core.recording.evaluate_outputs`).
 
 The local backend (:func:`cayley_heyoka.workflows.sweep.run_sweep`) and the Dask backend
 (:mod:`.sweep_dask`) both run :func:`propagate_members` on chunks of members.
@@ -156,7 +156,7 @@ def split(items: list, size: int) -> Iterator[list]:
 
 
 def _group_key(model: Any, scene: Scene) -> str:
-    from ..core.engine import cache_key
+    from ..core.compiler import cache_key
 
     # A step cap and the step budget are runtime arguments shared by one batch call.
     options = scene.integrator
@@ -207,10 +207,10 @@ def _run_group(
     """Members whose scenes have terminal events: one ``engine.run`` each."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from ..core import engine
+    from ..core import compiler, engine
 
     _, scene0, model0 = group[0]
-    compiled, cached = engine.compile_model(model0, scene0.integrator)  # once, before threads
+    compiled, cached = compiler.compile_model(model0, scene0.integrator)  # once, before threads
     if not cached:
         part.compile_seconds += compiled.compile_seconds
 
@@ -246,10 +246,10 @@ def _lanes_group(
 ) -> None:
     """Members sharing compiled code, in double: batch lanes (each member's own terminal-event
     handlers acting on its lane)."""
-    from ..core import engine, lanes
+    from ..core import compiler, lanes, recording
 
     _, scene0, model0 = group[0]
-    compiled, cached = engine.compile_model(model0, scene0.integrator)  # the outputs' evaluator
+    compiled, cached = compiler.compile_model(model0, scene0.integrator)  # the outputs' evaluator
     batch, batch_cached = lanes.compile_batch(model0, scene0.integrator)
     part.compile_seconds += (0 if cached else compiled.compile_seconds) + (
         0 if batch_cached else batch.compile_seconds
@@ -258,7 +258,7 @@ def _lanes_group(
     initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
     pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
     try:
-        with engine.quiet_heyoka():  # a member going non-finite is reported as such
+        with compiler.quiet_heyoka():  # a member going non-finite is reported as such
             runs = lanes.propagate_members(
                 model0,
                 scene0.integrator,
@@ -278,10 +278,10 @@ def _lanes_group(
     for (row, _, model), run in zip(group, runs, strict=True):
         reached = len(run.states)
         rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
-        values = engine.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
+        values = recording.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
         complete = run.status == 0
         part.message[row] = run.message
-        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
+        if complete and (bad := recording.first_nonfinite(model, values, grid)) is not None:
             # As a lone run would: the member stops at its first non-finite output.
             k, part.message[row] = bad
             complete = False
@@ -300,10 +300,10 @@ def _ensemble_group(
     """Members sharing compiled code and without terminal events: heyoka's ensemble."""
     import heyoka as hy
 
-    from ..core import engine
+    from ..core import compiler, recording
 
     _, scene0, model0 = group[0]
-    compiled, cached = engine.compile_model(model0, scene0.integrator)
+    compiled, cached = compiler.compile_model(model0, scene0.integrator)
     if not cached:
         part.compile_seconds += compiled.compile_seconds
     grid = scene0.output.time_grid(prec)
@@ -349,13 +349,13 @@ def _ensemble_group(
             }.get(outcome, f"stopped with outcome {outcome}")
             part.message[row] = f"{why} after {kept} (the last output time kept)"
         part.steps[row] = nsteps
-        logs = engine.event_logs(model, ta, prec, None)
+        logs = recording.event_logs(model, ta, prec, None)
         for name in layout.events:
             part.events[name][row] = len(logs[name]) if name in logs else 0
         # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
         rows = np.array([pars[i].copy() for _ in range(reached)]).reshape(reached, len(pars[i]))
-        values = engine.evaluate_outputs(compiled, model, states, rows, grid[:reached], prec)
-        if complete and (bad := engine.first_nonfinite(model, values, grid)) is not None:
+        values = recording.evaluate_outputs(compiled, model, states, rows, grid[:reached], prec)
+        if complete and (bad := recording.first_nonfinite(model, values, grid)) is not None:
             # As a lone run would: the member stops at its first non-finite output.
             k, part.message[row] = bad
             part.status[row], complete = FAILED, False

@@ -7,7 +7,7 @@ import pytest
 from helpers import PRECISIONS, free_body
 
 from cayley_heyoka import IntegrationError, Result, Scene, run
-from cayley_heyoka.core import engine
+from cayley_heyoka.core import compiler
 from cayley_heyoka.core.families import FAMILIES
 
 HEAVY_TOP = {"heavy_top": {"weight": "1", "center_of_mass": ["0.1", "-0.05", "0.3"]}}
@@ -144,7 +144,7 @@ def test_only_the_needed_terms_are_compiled():
 
 
 def test_compiled_integrators_are_reused():
-    engine.clear_cache()
+    compiler.clear_cache()
     first = run(Scene.from_dict(free_body()))
     again = run(Scene.from_dict(free_body()))
     other_numbers = run(
@@ -152,7 +152,7 @@ def test_compiled_integrators_are_reused():
     )
     assert not first.metadata["compiled_from_cache"]
     assert again.metadata["compiled_from_cache"] and other_numbers.metadata["compiled_from_cache"]
-    assert engine.cache_size() == 1
+    assert compiler.cache_size() == 1
     assert np.array_equal(first["p"], again["p"])
     assert not np.array_equal(first["p"], other_numbers["p"])
 

@@ -1,0 +1,161 @@
+"""What a run records: outputs and monitors evaluated on the recorded states in the run's
+precision, event logs, and the checks that a run's records fit in memory and start finite."""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from .compiler import Compiled, flat_outputs
+from .errors import SceneError
+from .model import Model
+from .precision import Precision, exact_fraction
+from .result import EventLog
+from .scene import Scene
+
+#: Largest estimated memory of a run's recorded rows (output times × (state + parameters +
+#: outputs + monitors) numbers); the results, their evaluation and the saved file need a few
+#: times this again, so a run above it would exhaust an ordinary machine.
+MAX_RECORD_BYTES = 2**30
+
+
+def check_fits(scene: Scene, model: Model) -> None:
+    """Refuse a run whose recorded rows would exceed :data:`MAX_RECORD_BYTES`, or whose
+    ``max_step`` needs more steps than ``integrator.max_steps`` to cover its span."""
+    options, output = scene.integrator, scene.output
+    prec = options.precision
+    width = 1 + len(model.system) + len(model.pars) + len(flat_outputs(model))
+    # heyoka's MPFR numbers hold their limbs outside the array.
+    size = {"double": 8, "quad": 16}.get(prec.kind) or 32 + 8 * math.ceil(prec.bits / 64)
+    need = output.count * width * size
+    if need > MAX_RECORD_BYTES:
+        raise SceneError(
+            "output.times",
+            f"{output.count} output times of {width} numbers ({prec.name}, {size} bytes each) "
+            f"need ~{need / 2**30:.3g} GiB, more than {MAX_RECORD_BYTES / 2**30:.3g} GiB; "
+            "record fewer times",
+        )
+    if options.max_step is not None:
+        start, stop = output.span()
+        steps = (exact_fraction(stop) - exact_fraction(start)) / exact_fraction(options.max_step)
+        if steps > options.max_steps:
+            raise SceneError(
+                "integrator.max_step",
+                f"{options.max_step} needs at least {float(Fraction(steps)):.3g} steps from "
+                f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
+                f"{options.max_steps}",
+            )
+
+
+def require_finite(values: np.ndarray, names: list[str], what: str) -> None:
+    bad = np.flatnonzero(~np.isfinite(values))
+    if len(bad):
+        i = int(bad[0])
+        raise SceneError(
+            names[i], f"the {what} is {values[i]} at the start: it must be finite to integrate"
+        )
+
+
+def first_nonfinite(
+    model: Model, values: dict[str, np.ndarray], times: np.ndarray
+) -> tuple[int, str] | None:
+    """The first row at which an output or monitor of ``values`` is not finite, and the
+    message of the stop there; None if every value is finite."""
+    first = None
+    for name, value in values.items():
+        if name in model.unbounded:
+            # Infinite (or 0/0) at a half-turn, rightly; a state gone NaN shows in the others.
+            continue
+        rows = np.asarray(value).reshape(len(value), -1)
+        bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
+        if len(bad) and (first is None or bad[0] < first[0]):
+            first = (int(bad[0]), name)
+    if first is None:
+        return None
+    k, name = first
+    kind = "monitor" if name in model.monitors else "output"
+    return k, f"the {kind} {name} became non-finite at t = {times[k]}; results kept up to there"
+
+
+def evaluate_outputs(
+    compiled: Compiled,
+    model: Model,
+    state: np.ndarray,
+    pars: np.ndarray,
+    times: np.ndarray,
+    prec: Precision,
+) -> dict[str, np.ndarray]:
+    """The model's outputs and monitors from states recorded by ``compiled``'s integrator.
+
+    Parameters
+    ----------
+    compiled
+        What :func:`compile_model` returned for ``model``.
+    state
+        States, shape ``(n, len(model.system))``, one row per time.
+    pars
+        The whole parameter vector at each time, shape ``(n, len(model.pars))``.
+    times
+        The ``n`` times.
+    prec
+        The precision of the arrays.
+
+    Returns
+    -------
+    dict
+        Each output and monitor by name: shape ``(n,)``, or ``(n, k)`` for a k-vector monitor.
+    """
+    evaluator = compiled.evaluator
+    n = len(state)
+    if n == 0:
+        rows = np.empty((len(flat_outputs(model)), 0))
+    else:
+        kwargs: dict[str, Any] = {"time": np.ascontiguousarray(times)}
+        if evaluator.nparams:
+            kwargs["pars"] = np.ascontiguousarray(pars[:, : evaluator.nparams].T)
+        rows = evaluator(np.ascontiguousarray(state.T), **kwargs)
+    out: dict[str, np.ndarray] = {}
+    k = 0
+    for name, value in list(model.outputs.items()) + list(model.monitors.items()):
+        width = len(value) if isinstance(value, list) else 1
+        block = rows[k : k + width]
+        out[name] = block.T.copy() if isinstance(value, list) else block[0].copy()
+        k += width
+    return out
+
+
+def event_logs(
+    model: Model, ta: Any, prec: Precision, stopped_at: tuple | None
+) -> dict[str, EventLog]:
+    """The occurrences recorded by ``ta``'s event callbacks (and a terminal stop), by name."""
+    recorded = ta.nt_events if model.events else []
+    return logs_of(
+        model, [(ev.callback.times, ev.callback.directions) for ev in recorded], prec, stopped_at
+    )
+
+
+def logs_of(
+    model: Model, recorded: list[tuple[list, list]], prec: Precision, stopped_at: tuple | None
+) -> dict[str, EventLog]:
+    """The event logs of ``model`` from each event's recorded (times, directions)."""
+    gathered: dict[str, list[tuple[Any, int, str]]] = {}
+    for spec, (times, directions) in zip(model.events, recorded, strict=True):
+        gathered.setdefault(spec.name, [])
+        gathered[spec.name] += [
+            (t, d, spec.label_for(d)) for t, d in zip(times, directions, strict=True)
+        ]
+    if stopped_at is not None:
+        spec, t, d = stopped_at
+        gathered.setdefault(spec.name, []).append((t, d, spec.label_for(d)))
+    logs = {}
+    for name, items in gathered.items():
+        items.sort(key=lambda x: x[0])
+        logs[name] = EventLog(
+            time=prec.array([x[0] for x in items]) if items else prec.array([]),
+            direction=np.array([x[1] for x in items], dtype=int),
+            label=np.array([x[2] for x in items], dtype=str),
+        )
+    return logs
