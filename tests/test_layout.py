@@ -112,3 +112,43 @@ def test_families_are_registered_by_their_own_record():
     for name in FAMILIES:
         family = FAMILIES[name]
         assert isinstance(family, Family) and family.name == name
+
+
+def test_every_import_in_the_package_resolves():
+    """Function-level imports included: a module moved or a name renamed breaks a deferred
+    import only when that function first runs, which a test may never reach."""
+    import ast
+
+    broken = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        package = parts if path.name == "__init__.py" else parts[:-1]
+        package = package[:-1] if parts[-1] == "__init__" else package
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = list(package)[: len(package) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            elif node.module and node.module.split(".")[0] == "cayley_heyoka":
+                target = node.module
+            else:
+                continue
+            module = importlib.import_module(target)
+            for alias in node.names:
+                if hasattr(module, alias.name):
+                    continue
+                try:
+                    importlib.import_module(f"{target}.{alias.name}")
+                except ImportError:
+                    broken.append(f"{path.relative_to(PACKAGE.parent)}: {target}.{alias.name}")
+    assert broken == []
+
+
+def test_no_module_is_too_long():
+    long = {
+        str(p.relative_to(PACKAGE.parent)): n
+        for p in PACKAGE.rglob("*.py")
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES
+    }
+    assert long == {}

@@ -178,6 +178,7 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
     """
     import heyoka as hy
 
+    from cayley_heyoka.core import vectors
     from cayley_heyoka.core.model import ParTable
     from cayley_heyoka.mechanics import frames
     from cayley_heyoka.mechanics import kepler as el
@@ -192,9 +193,9 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
     V = list(hy.make_vars("vx", "vy", "vz"))
     D = list(hy.make_vars("dx", "dy", "dz"))
     g = gradient(disturbing_function(orbit.perturbations, X, Context(mu, pars)), X)
-    r2 = frames.dot(X, X)
-    H = frames.cross(X, V)
-    coef = -frames.dot(D, frames.cross(X, g)) / frames.dot(H, H)
+    r2 = vectors.dot(X, X)
+    H = vectors.cross(X, V)
+    coef = -vectors.dot(D, vectors.cross(X, g)) / vectors.dot(H, H)
     rhs = [*V, *[-mu * x * r2**-1.5 + gi for x, gi in zip(X, g, strict=True)]]
     rhs += [coef * c for c in H]
     system = list(zip([*X, *V, *D], rhs, strict=True))
@@ -205,7 +206,7 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
         # The gauge Σ(t₀) of the scene (the Cartesian scene itself has none).
         sigma0 = mpmath.mpf(str(base["orbit"].get("sigma0", "0")))
         s = el.cartesian_to_cayley(x0, v0, sigma=sigma0, frame=frame0)
-        M02 = frames.matmul(
+        M02 = vectors.matmul(
             frames.plane_matrix(*frame0), frames.plane_matrix(s.Theta, s.Sigma, s.Phi)
         )
         d0 = [M02[i][0] for i in range(3)]
@@ -233,20 +234,20 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
             y = [to_mpf(c) for c in out[i]]
             x, v, d = y[0:3], y[3:6], y[6:9]
             M01 = frames.plane_matrix(*_plane_angles_at(orbit.plane, mpmath.mpf(t)))
-            M10 = frames.transpose(M01)
-            Xf, Vf, Df = frames.matvec(M10, x), frames.matvec(M10, v), frames.matvec(M10, d)
-            Hf = frames.cross(Xf, Vf)
-            h = mpmath.sqrt(frames.dot(Hf, Hf))
+            M10 = vectors.transpose(M01)
+            Xf, Vf, Df = vectors.matvec(M10, x), vectors.matvec(M10, v), vectors.matvec(M10, d)
+            Hf = vectors.cross(Xf, Vf)
+            h = mpmath.sqrt(vectors.dot(Hf, Hf))
             n = [c / h for c in Hf]
             Phi = mpmath.atan2(mpmath.sqrt(n[0] ** 2 + n[1] ** 2), n[2])
             Theta = mpmath.atan2(n[0], -n[1])
             N = [mpmath.cos(Theta), mpmath.sin(Theta), mpmath.mpf(0)]
-            Sigma = mpmath.atan2(frames.dot(N, frames.cross(n, Df)), frames.dot(N, Df))
-            u = mpmath.atan2(frames.dot(Xf, frames.cross(n, N)), frames.dot(Xf, N))
-            r = mpmath.sqrt(frames.dot(x, x))
+            Sigma = mpmath.atan2(vectors.dot(N, vectors.cross(n, Df)), vectors.dot(N, Df))
+            u = mpmath.atan2(vectors.dot(Xf, vectors.cross(n, N)), vectors.dot(Xf, N))
+            r = mpmath.sqrt(vectors.dot(x, x))
             values = {
                 "r": r,
-                "rdot": frames.dot(x, v) / r,
+                "rdot": vectors.dot(x, v) / r,
                 "rho": u + Sigma,
                 "h": h,
                 "Theta": Theta,

@@ -283,6 +283,17 @@ def exact_fraction(value: Number) -> Fraction:
     return Fraction(value)
 
 
+def scene_mpf(value: Any) -> Any:
+    """A scene number as an mpmath number, exact to mpmath's current precision (its rational
+    value divided there once); an mpmath number is returned as it is."""
+    import mpmath
+
+    if isinstance(value, mpmath.mpf):
+        return value
+    f = exact_fraction(value)
+    return mpmath.mpf(f.numerator) / f.denominator
+
+
 def decimal_text(text: str) -> str:
     """Normalise a scene number written as text, the same way for every precision.
 

@@ -27,7 +27,7 @@ from ..core.errors import SceneError
 from ..core.expressions import uses_time
 from ..core.precision import Number, exact_fraction, exceeds_pi
 from ..core.scene import check_keys, number, vector
-from ..mechanics.frames import cross, dot
+from ..core.vectors import cross, dot
 from ..mechanics.kepler import ELEMENT_KEYS, Elements
 from .predominant_mass import system as planets
 

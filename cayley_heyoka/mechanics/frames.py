@@ -23,14 +23,12 @@ The functions use arithmetic and ``sin``/``cos``/``sqrt``/``atan2`` only, taken 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-Matrix = list[list[Any]]
-Vector = list[Any]
+from ..core.vectors import Matrix, Vector
 
 
 def functions_for(*values: Any) -> SimpleNamespace:
@@ -91,28 +89,3 @@ def orbit_axes(Theta: Any, Phi: Any, u: Any) -> tuple[Vector, Vector, Vector]:
     y3 = [-cT * su - sT * cP * cu, -sT * su + cT * cP * cu, sP * cu]
     n = [sT * sP, -cT * sP, cP]
     return x3, y3, n
-
-
-def matmul(a: Matrix, b: Matrix) -> Matrix:
-    """Product of two 3×3 tables."""
-    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-
-
-def transpose(a: Matrix) -> Matrix:
-    """Transpose of a 3×3 table (its inverse)."""
-    return [[a[j][i] for j in range(3)] for i in range(3)]
-
-
-def matvec(a: Matrix, v: Sequence[Any]) -> Vector:
-    """``a v`` for a 3×3 table and a 3-vector."""
-    return [sum(a[i][k] * v[k] for k in range(3)) for i in range(3)]
-
-
-def dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
-    """Scalar product of two 3-vectors."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def cross(a: Sequence[Any], b: Sequence[Any]) -> Vector:
-    """Vector product of two 3-vectors."""
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]

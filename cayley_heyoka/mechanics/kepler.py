@@ -60,16 +60,9 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from cayley_heyoka.core.accuracy import to_mpf
-from cayley_heyoka.mechanics.frames import (
-    cross,
-    dot,
-    functions_for,
-    matvec,
-    orbit_axes,
-    plane_matrix,
-    transpose,
-)
+from ..core.accuracy import to_mpf
+from ..core.vectors import cross, dot, matvec, transpose
+from .frames import functions_for, orbit_axes, plane_matrix
 
 __all__ = [
     "CayleyState",

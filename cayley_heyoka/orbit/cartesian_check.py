@@ -138,12 +138,13 @@ def _difference(a: Any, b: Any) -> np.ndarray:
 
 def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     """Sensitivities of the Kepler orbit through the starting state (see :func:`check_twin`)."""
-    from .model import _mpf, initial_cartesian
+    from ..core.precision import scene_mpf
+    from .model import initial_cartesian
 
     orbit = scene.model
     t0 = scene.output.time_grid(scene.integrator.precision)[0]
     with mpmath.workdps(_SENSITIVITY_DPS):
-        mu = _mpf(orbit.mu)
+        mu = scene_mpf(orbit.mu)
         x0, v0 = initial_cartesian(orbit, mpmath.mpf(str(t0)))
         start = el.cartesian_to_elements(x0, v0, mu)
         if not 0 <= start.e < 1:

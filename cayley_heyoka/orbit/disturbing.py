@@ -35,6 +35,7 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
+from ..core import vectors
 from ..core.errors import SceneError
 from ..core.expressions import parse_expression, uses_time
 from ..core.model import ParTable
@@ -132,7 +133,7 @@ class Zonal:
         i = self.coordinate_axis()
         if i is not None:
             return x[i] if exact_fraction(self.axis[i]) > 0 else -x[i]
-        return frames.dot(self.unit_axis(ctx), x)
+        return vectors.dot(self.unit_axis(ctx), x)
 
     def unit_axis(self, ctx: Context) -> list[Expr]:
         """k̂ as three parameters, normalised in mpmath (``zonal.axis_unit[i]``), allocated on
@@ -147,7 +148,7 @@ class Zonal:
         ]
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
-        r2 = frames.dot(x, x)
+        r2 = vectors.dot(x, x)
         s = self._axial(x, ctx)
         mu, R = ctx.exact(ctx.mu_value), ctx.exact(self.radius)
         terms = []
@@ -300,16 +301,16 @@ class ThirdBody:
         """P̂ (towards the pericentre) and Q̂ (90° ahead) of the perturber's orbit, in mpmath;
         for a circular orbit P̂ points to the node (ω is counted in the phase instead)."""
         node, i = ctx.exact(self.node), ctx.exact(self.inclination)
-        rot = frames.matmul(frames.rotation_z(node), frames.rotation_x(i))
+        rot = vectors.matmul(frames.rotation_z(node), frames.rotation_x(i))
         if not self.circular:
-            rot = frames.matmul(rot, frames.rotation_z(ctx.exact(self.argument_of_pericentre)))
+            rot = vectors.matmul(rot, frames.rotation_z(ctx.exact(self.argument_of_pericentre)))
         return [row[0] for row in rot], [row[1] for row in rot]
 
     def normal(self, ctx: Context) -> list[Expr]:
         """Unit normal of the perturber's orbit, P̂ × Q̂, as parameters (for monitors)."""
         with mpmath.workdps(ctx.dps):
             P, Q = self.axes(ctx)
-            n = frames.cross(P, Q)
+            n = vectors.cross(P, Q)
         return [ctx.constant(f"third_body.normal[{i}]", lambda i=i: n[i]) for i in range(3)]
 
     def mean_anomaly(self, ctx: Context) -> mpmath.mpf:
@@ -354,17 +355,17 @@ class ThirdBody:
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         x3 = self.position(ctx)
-        r3sq = frames.dot(x3, x3)
+        r3sq = vectors.dot(x3, x3)
         if self.degree is None:
             gm = ctx.pars.add("third_body.gm", self.gm)
             d = [x[i] - x3[i] for i in range(3)]
-            direct = frames.dot(d, d) ** -0.5
-            indirect = frames.dot(x, x3) * r3sq**-1.5
+            direct = vectors.dot(d, d) ** -0.5
+            indirect = vectors.dot(x, x3) * r3sq**-1.5
             return gm * (direct - indirect)
         # Legendre series of the direct part; l = 0 is constant in x, l = 1 cancels the
         # indirect part: Ω = Gm₃ Σ_{l≥2} rˡ Pₗ(cos ψ) / r₃ˡ⁺¹, cos ψ = x·x₃/(r r₃).
-        r2 = frames.dot(x, x)
-        s = frames.dot(x, x3) * r3sq**-0.5
+        r2 = vectors.dot(x, x)
+        s = vectors.dot(x, x3) * r3sq**-0.5
         terms = []
         gm_value = ctx.exact(self.gm)
         for k in range(2, self.degree + 1):
@@ -392,7 +393,7 @@ class UserPotential:
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         symbols = dict(zip("xyz", x, strict=True))
-        symbols["r"] = hy.sqrt(frames.dot(x, x))
+        symbols["r"] = hy.sqrt(vectors.dot(x, x))
         symbols["mu"] = ctx.mu
         return parse_expression(self.text, symbols, ctx.pars, "perturbations.potential.Omega")
 

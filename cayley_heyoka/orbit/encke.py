@@ -61,9 +61,10 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..core import vectors
 from ..core.model import ParTable
 from ..core.precision import Precision
-from ..mechanics import frames
+from ..core.vectors import dot
 
 Expr = Any  # a heyoka expression
 STATE = ("dx", "dy", "dz", "dvx", "dvy", "dvz", "psi")
@@ -380,20 +381,20 @@ def _rectify(ar: Any, mu: Any, X: list, V: list) -> tuple[dict[str, Any], list]:
 def _osculating(ar: Any, mu: Any, X: Sequence[Any], V: Sequence[Any]) -> dict[str, Any]:
     """The osculating ellipse of (X, V), exact in ``ar``'s arithmetic: e, 1/a, |h|, the axes
     A = a P̂ and B = b Q̂, the eccentric anomaly E₀ (in (−π, π]) and the mean motion n."""
-    r = ar.sqrt(_dot(X, X))
-    v2 = _dot(V, V)
-    xv = _dot(X, V)
-    H = frames.cross(X, V)
-    h = ar.sqrt(_dot(H, H))
+    r = ar.sqrt(dot(X, X))
+    v2 = dot(V, V)
+    xv = dot(X, V)
+    H = vectors.cross(X, V)
+    h = ar.sqrt(dot(H, H))
     inv_a = 2 / r - v2 / mu
     ev = [((v2 - mu / r) * X[i] - xv * V[i]) / mu for i in range(3)]
-    e = ar.sqrt(_dot(ev, ev))
+    e = ar.sqrt(dot(ev, ev))
     ar.ellipse(e, inv_a, h)
     a = 1 / inv_a
     # e = 0 exactly leaves the pericentre undefined: any axis of the plane serves.
     circular = not ar.positive(e)
     P = [c / r for c in X] if circular else [c / e for c in ev]
-    Q = [c / h for c in frames.cross(H, P)]
+    Q = [c / h for c in vectors.cross(H, P)]
     b = a * ar.sqrt((1 - e) * (1 + e))
     E0 = 0 * e if circular else ar.atan2(xv / ar.sqrt(mu * a), 1 - r / a)
     n = ar.sqrt(mu * inv_a) * inv_a
@@ -415,9 +416,9 @@ def _derived(p: dict[str, Any], k2: Any) -> dict[str, Any]:
     B = [p[f"B[{i}]"] for i in range(3)]
     e, n = p["e"], p["n"]
     return {
-        "alpha": k2 - _dot(A, A),
-        "beta": k2 * (1 - e) * (1 + e) - _dot(B, B),
-        "gamma": _dot(A, B),
+        "alpha": k2 - dot(A, A),
+        "beta": k2 * (1 - e) * (1 + e) - dot(B, B),
+        "gamma": dot(A, B),
         "n2": n * n,
         "kappa": 3 * n * n / (2 * k2),
     }
@@ -532,8 +533,3 @@ def _ellipse(ar: Any, p: dict[str, Any], E: Any) -> tuple[list, list]:
     y = [u * p[f"A[{i}]"] + w * p[f"B[{i}]"] for i in range(3)]
     ydot = [rate * (cE * p[f"B[{i}]"] - w * p[f"A[{i}]"]) for i in range(3)]
     return y, ydot
-
-
-def _dot(a: Sequence[Any], b: Sequence[Any]) -> Any:
-    """a · b of numbers (the handler's; the equations write their sums with ``hy.sum``)."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]

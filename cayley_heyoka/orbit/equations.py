@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import heyoka as hy
 
+from ..core import vectors
 from ..mechanics import frames
 from .disturbing import Gradient
 
@@ -95,7 +96,7 @@ def cayley_axes(
     if plane is None:
         return OrbitAxes(x3, y3, n), None
     M01 = plane.matrix()
-    return OrbitAxes(*(frames.matvec(M01, v) for v in (x3, y3, n))), M01
+    return OrbitAxes(*(vectors.matvec(M01, v) for v in (x3, y3, n))), M01
 
 
 def quaternion_matrix(q: Sequence[Expr]) -> frames.Matrix:
@@ -198,7 +199,7 @@ def cartesian_rates(
 ) -> list[Expr]:
     """ẋ = v, v̇ = −(μ/r³ + c) x + g for ∇Ω = −c x + g: the part of ∇Ω along x joins the
     Kepler term, so that x is multiplied once."""
-    r2 = frames.dot(x, x)
+    r2 = vectors.dot(x, x)
     central = [mu * r2**-1.5, *(g.central if g is not None else [])]
     k = -_total(central)
     acc = [k * xi for xi in x]

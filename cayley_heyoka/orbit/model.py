@@ -22,10 +22,11 @@ from typing import Any
 import heyoka as hy
 import mpmath
 
+from ..core import vectors
 from ..core.errors import SceneError
 from ..core.expressions import parse_expression
 from ..core.model import EventSpec, Model, ParTable, TerminalSpec
-from ..core.precision import exact_fraction
+from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
 from ..mechanics import frames
 from ..mechanics import kepler as el
@@ -60,7 +61,7 @@ def build_model(scene: Scene) -> Model:
         # Its initial state is the deviation from the initial osculating ellipse, which the
         # formulation's own rectification computes.
         with mpmath.workdps(prec.dps + _GUARD_DIGITS):
-            b.encke(*initial_cartesian(orbit, _mpf(t0)))
+            b.encke(*initial_cartesian(orbit, scene_mpf(t0)))
     else:
         start = initial_state(orbit, t0, prec.dps + _GUARD_DIGITS)
         getattr(b, orbit.formulation)(start)
@@ -89,16 +90,16 @@ def check(scene: Scene) -> None:
     with mpmath.workdps(30):
         t = _start_time(scene)
         x, v = initial_cartesian(orbit, t)
-        H = frames.cross(x, v)
-        h = mpmath.sqrt(frames.dot(H, H))
+        H = vectors.cross(x, v)
+        h = mpmath.sqrt(vectors.dot(H, H))
         where = "orbit.elements" if orbit.initial[0] == "elements" else "orbit.velocity"
         if h == 0:
             raise SceneError(
                 where, "gives rectilinear motion (x × v = 0): the orbit plane is undefined"
             )
-        r = mpmath.sqrt(frames.dot(x, x))
-        mu = _mpf(orbit.mu)
-        energy = frames.dot(v, v) / 2 - mu / r
+        r = mpmath.sqrt(vectors.dot(x, x))
+        mu = scene_mpf(orbit.mu)
+        energy = vectors.dot(v, v) / 2 - mu / r
         e = mpmath.sqrt(max(mpmath.mpf(0), 1 + 2 * energy * h * h / (mu * mu)))
         q = h * h / (mu * (1 + e))
         if orbit.formulation == "encke" and e >= 1:
@@ -125,9 +126,9 @@ def check(scene: Scene) -> None:
         # no cosec Φ is compiled: any inclination will do.
         if orbit.formulation == "cayley" and (orbit.perturbations or turning):
             M01 = _plane_matrix_at(orbit.plane, t)
-            n = frames.matvec(frames.transpose(M01), [c / h for c in H])
+            n = vectors.matvec(vectors.transpose(M01), [c / h for c in H])
             sin_phi = mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
-            limit = _mpf(orbit.equatorial_limit)
+            limit = scene_mpf(orbit.equatorial_limit)
             if sin_phi <= limit or sin_phi == 0:
                 raise SceneError(
                     "orbit.formulation",
@@ -142,10 +143,10 @@ def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
     """Position and velocity at the start time, in mpmath at the current precision."""
     if orbit.initial[0] == "cartesian":
         _, x, v = orbit.initial
-        return [_mpf(c) for c in x], [_mpf(c) for c in v]
-    values = {k: _mpf(v) for k, v in orbit.initial[1].items()}
+        return [scene_mpf(c) for c in x], [scene_mpf(c) for c in v]
+    values = {k: scene_mpf(v) for k, v in orbit.initial[1].items()}
     return el.elements_to_cartesian(
-        el.Elements(**values), _mpf(orbit.mu), frame=_plane_angles_at(orbit.plane, t)
+        el.Elements(**values), scene_mpf(orbit.mu), frame=_plane_angles_at(orbit.plane, t)
     )
 
 
@@ -155,13 +156,13 @@ def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
     if orbit.formulation == "encke":
         raise ValueError("the encke state is the deviation from its ellipse: build the model")
     with mpmath.workdps(dps):
-        t = _mpf(t)
+        t = scene_mpf(t)
         x, v = initial_cartesian(orbit, t)
         if orbit.formulation == "cartesian":
             values = [*x, *v]
         else:
             frame = _plane_angles_at(orbit.plane, t)
-            s = el.cartesian_to_cayley(x, v, sigma=_mpf(orbit.sigma0), frame=frame)
+            s = el.cartesian_to_cayley(x, v, sigma=scene_mpf(orbit.sigma0), frame=frame)
             values = [s.r, s.rdot, s.rho, s.h]
             if orbit.formulation == "cayley":
                 values += [s.Theta, s.Sigma, s.Phi]
@@ -213,15 +214,15 @@ class _Builder:
     def cartesian(self, start: list[str]) -> None:
         x = self.X
         v = list(hy.make_vars(*CARTESIAN[3:]))
-        rhs = eq.cartesian_rates(x, v, self.mu, self.force(x, frames.dot(x, x)))
+        rhs = eq.cartesian_rates(x, v, self.mu, self.force(x, vectors.dot(x, x)))
         self.system = list(zip([*x, *v], rhs, strict=True))
         self.initial = start
         self.position, self.velocity = x, v
-        self.momentum = frames.cross(x, v)
+        self.momentum = vectors.cross(x, v)
         self.outputs = dict(zip(CARTESIAN, [*x, *v], strict=True))
-        self.node_function = frames.dot(self._plane_normal(), x)
-        self.apsis_function = frames.dot(x, v)
-        self.radius = hy.sqrt(frames.dot(x, x))
+        self.node_function = vectors.dot(self._plane_normal(), x)
+        self.apsis_function = vectors.dot(x, v)
+        self.radius = hy.sqrt(vectors.dot(x, x))
 
     def encke(self, x: list, v: list) -> None:
         """δ = x − y from the osculating ellipse y, and ψ = E/2, half its eccentric anomaly
@@ -245,11 +246,11 @@ class _Builder:
         rates = [*dv, *acc, parts["psi_rate"]]
         self.system = list(zip([*d, *dv, psi], rates, strict=True))
         x_, v_ = self.position, self.velocity
-        self.momentum = frames.cross(x_, v_)
+        self.momentum = vectors.cross(x_, v_)
         self.outputs = dict(zip(CARTESIAN, [*x_, *v_], strict=True))
-        self.node_function = frames.dot(self._plane_normal(), x_)
-        self.apsis_function = frames.dot(x_, v_)
-        self.radius = hy.sqrt(frames.dot(x_, x_))
+        self.node_function = vectors.dot(self._plane_normal(), x_)
+        self.apsis_function = vectors.dot(x_, v_)
+        self.radius = hy.sqrt(vectors.dot(x_, x_))
         self.terminal.append(TerminalSpec(en.event(psi), 1, en, "rectifications"))
 
     def cayley(self, start: list[str]) -> None:
@@ -291,7 +292,9 @@ class _Builder:
         # output only.
         M02 = eq.quaternion_matrix(q)
         M12 = (
-            M02 if self.plane is None else frames.matmul(frames.transpose(self.plane.matrix()), M02)
+            M02
+            if self.plane is None
+            else vectors.matmul(vectors.transpose(self.plane.matrix()), M02)
         )
         Theta = hy.atan2(M12[0][2], -M12[1][2])
         Phi = hy.atan2(hy.sqrt(M12[0][2] ** 2 + M12[1][2] ** 2), M12[2][2])
@@ -299,7 +302,7 @@ class _Builder:
         values = [r, rdot, turns.rho(rho), h, Theta, Sigma, Phi]
         self.outputs.update(zip(CAYLEY, values, strict=True))
         self.outputs.update(zip(QUATERNION, q, strict=True))
-        self.node_function = frames.dot(self._plane_normal(), axes.radial)
+        self.node_function = vectors.dot(self._plane_normal(), axes.radial)
 
     def _revolutions(self, start: list[str], rho: Any) -> Revolutions:
         """Whole turns of ρ kept out of the state (:mod:`.revolutions`); ρ₀ = start[2] is
@@ -401,7 +404,7 @@ def _plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
     """(θ′, σ′, φ′) at time t in mpmath (zeros for the fixed frame)."""
     if motion is None:
         return (mpmath.mpf(0),) * 3
-    return _plane_angles(motion, _mpf(t), lambda _, v: _mpf(v))[0]
+    return _plane_angles(motion, scene_mpf(t), lambda _, v: scene_mpf(v))[0]
 
 
 def _plane_matrix_at(motion: PlaneMotion | None, t: Any) -> frames.Matrix:
@@ -438,15 +441,10 @@ def _start_time(scene: Scene) -> Any:
     return grid.times[0] if grid.times is not None else grid.grid[0]
 
 
-def _mpf(value: Any) -> mpmath.mpf:
-    f = exact_fraction(value) if not isinstance(value, mpmath.mpf) else None
-    return value if f is None else mpmath.mpf(f.numerator) / f.denominator
-
-
 # ---------------------------------------------------------------------- monitors and events
 def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
     """Energy; the Jacobi constant (circular perturber); k̂·(x × v) (zonal field)."""
-    v2 = frames.dot(b.velocity, b.velocity)
+    v2 = vectors.dot(b.velocity, b.velocity)
     energy = v2 / 2 - b.mu / b.radius
     if b.Omega is not None:
         energy = energy - b.at_position(b.Omega)
@@ -460,7 +458,7 @@ def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
         # In the frame turning with the perturber, H − n k̂₃·(x × v) is conserved.
         n = hy.par[ctx.pars.index("third_body.n")]
         k3 = third.normal(ctx)
-        monitors["jacobi"] = energy - n * frames.dot(k3, b.momentum)
+        monitors["jacobi"] = energy - n * vectors.dot(k3, b.momentum)
         others = [p for p in orbit.perturbations if p is not third]
         if not others:
             conserved.append("jacobi")
@@ -468,7 +466,7 @@ def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
         i = zonal.coordinate_axis()
         if i is None:
             k = [hy.par[ctx.pars.index(f"zonal.axis_unit[{j}]")] for j in range(3)]
-            monitors["polar_momentum"] = frames.dot(k, b.momentum)
+            monitors["polar_momentum"] = vectors.dot(k, b.momentum)
         else:
             sign = 1 if exact_fraction(zonal.axis[i]) > 0 else -1
             monitors["polar_momentum"] = sign * b.momentum[i]
@@ -526,5 +524,5 @@ def _equatorial_function(b: _Builder) -> Any:
     """(sin²Φ − ε²)|L|², zero where sin Φ = ε; no square root, no division."""
     eps = b.equatorial_limit()
     L = b.momentum
-    c = frames.dot(b._plane_normal(), L)
-    return frames.dot(L, L) * (1 - eps * eps) - c * c
+    c = vectors.dot(b._plane_normal(), L)
+    return vectors.dot(L, L) * (1 - eps * eps) - c * c

@@ -35,6 +35,7 @@ import mpmath
 
 from ..core.accuracy import PrecisionNotReached, certify, to_mpf
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
+from ..core.vectors import cross, dot
 from .attitude import matvec, rodrigues_to_matrix
 from .euler1758 import (
     GUARD,
@@ -129,14 +130,6 @@ class UpsilonQuadratures:
         return max(self.errors.values())
 
 
-def _cross(x, y):
-    return [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]]
-
-
-def _dot(x, y) -> mpmath.mpf:
-    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
-
-
 class _CayleyConstants:
     """Everything that depends on the inputs only, at one working precision."""
 
@@ -148,9 +141,9 @@ class _CayleyConstants:
         self.inertia = I
         Lb = [I[i] * w[i] for i in range(3)]
         self.space_momentum = matvec(rodrigues_to_matrix(rho), Lb)  # eq. (6): (a, b, c)
-        self.h = _dot(Lb, w)
-        self.k = mpmath.sqrt(_dot(Lb, Lb))
-        omega0 = _dot(rho, Lb)
+        self.h = dot(Lb, w)
+        self.k = mpmath.sqrt(dot(Lb, Lb))
+        omega0 = dot(rho, Lb)
         self.angle0 = 2 * mpmath.atan(omega0 / self.k)
         self.angle = QuarterwiseIntegral(self.motion, self.dangle_dtheta, "angle")
         self.angle_at_theta0 = self.angle(self.motion.theta0)
@@ -166,7 +159,7 @@ class _CayleyConstants:
 
     def dangle_dt(self, rates) -> mpmath.mpf:
         """d[2 tan⁻¹(Ω/k)]/dt = k(h + Φ)/(2υ) (Cayley 1846, eqs. (19)–(28))."""
-        Phi = _dot(self.space_momentum, rates)
+        Phi = dot(self.space_momentum, rates)
         return self.k * (self.h + Phi) / (2 * self.upsilon(self.momentum(rates)))
 
     def dangle_dtheta(self, s: mpmath.mpf, c: mpmath.mpf) -> mpmath.mpf:
@@ -183,12 +176,12 @@ class _CayleyConstants:
 
     def dupsilon_dtheta(self, s: mpmath.mpf, c: mpmath.mpf) -> mpmath.mpf:
         """dυ/dΘ = ½ a·d(L_b)/dΘ at sin Θ = s, cos Θ = c."""
-        return _dot(self.space_momentum, self.momentum(self.motion.derivative(s, c))) / 2
+        return dot(self.space_momentum, self.momentum(self.motion.derivative(s, c))) / 2
 
     def upsilon_step(self, s0: mpmath.mpf, c0: mpmath.mpf, step: mpmath.mpf):
         """υ(Θ₀ + step) − υ(Θ₀) without cancellation, and sin, cos of Θ₀ + step."""
         difference, s1, c1 = self.motion.step_from(s0, c0, step)
-        return _dot(self.space_momentum, self.momentum(difference)) / 2, s1, c1
+        return dot(self.space_momentum, self.momentum(difference)) / 2, s1, c1
 
     def turning_thetas(self) -> list[mpmath.mpf]:
         """The Θ in [0, 2π) where dυ/dΘ = 0 (V = 0), in increasing order (cached)."""
@@ -346,7 +339,7 @@ class Cayley1846:
             omega_over_k = sin_half / cos_half
             Omega = k.k * omega_over_k
             a_plus_L = [x + y for x, y in zip(a, Lb, strict=True)]
-            L_cross_a = _cross(Lb, a)
+            L_cross_a = cross(Lb, a)
             rho = [
                 (Omega * x + y) / (2 * upsilon) for x, y in zip(a_plus_L, L_cross_a, strict=True)
             ]
@@ -518,13 +511,13 @@ def _stretch_integral(
         bisect.insort(etas, eta if direction > 0 else length - eta)
         chis.insert(bisect.bisect(chis, chi), chi)
         rates = k.motion.at(s, c).rates
-        V = _dot(k.space_momentum, _cross(k.momentum(rates), rates))
+        V = dot(k.space_momentum, cross(k.momentum(rates), rates))
         if V * forward <= 0:
             raise PrecisionNotReached(
                 "t (υ-quadrature)", k.motion.target_dps, 1.0, "V changed sign inside a stretch"
             )
         upsilon = ua + change * sin_chi**2
-        Phi = _dot(k.space_momentum, rates)
+        Phi = dot(k.space_momentum, rates)
         weight = change * 2 * sin_chi * cos_chi
         return mpmath.mpc(2 / V, k.k * (k.h + Phi) / (upsilon * V)) * weight
 

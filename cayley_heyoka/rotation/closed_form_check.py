@@ -31,7 +31,7 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
-from ..core.precision import exact_fraction
+from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
 from .attitude import quaternion_multiply
 
@@ -351,7 +351,7 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     body = scene.model
     dps = _SENSITIVITY_DPS
     with mpmath.workdps(dps + 10):
-        rates = [_mpf(x) for x in body.rates]
+        rates = [scene_mpf(x) for x in body.rates]
         size = mpmath.sqrt(sum(x * x for x in rates))
         q0 = [mpmath.mpf(str(c)) for c in body.initial_quaternion(Precision("real", 4 * dps))]
         half = _DELTA / 2
@@ -407,8 +407,3 @@ def _crossing_speed(scene: Scene) -> float:
         if wj2 > 0 and wk2 > 0:
             speeds.append(abs(I[j] - I[k]) / I[i] * math.sqrt(wj2 * wk2))
     return min(speeds) if speeds else math.inf
-
-
-def _mpf(value: Any) -> mpmath.mpf:
-    f = exact_fraction(value)
-    return mpmath.mpf(f.numerator) / f.denominator

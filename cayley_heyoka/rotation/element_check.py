@@ -23,23 +23,22 @@ from ..core.errors import SceneError
 from ..core.model import ParTable
 from ..core.precision import Precision
 from ..core.scene import Scene
+from ..core.vectors import dot
 from . import attitude as att
 from . import equations as eq
+from .brackets import cayley_brackets, check_brackets
 from .model import force_function, rodrigues_of_matrix
 from .varying_constants import (
     ELEMENTS,
     SAFETY,
     CayleyElements,
-    _column_scales,
-    _cross,
-    _dot,
-    _floats,
-    _period,
-    _row_errors,
-    _solve,
-    cayley_brackets,
     cayley_elements,
-    check_brackets,
+    column_scales,
+    cross_array,
+    floats,
+    free_period,
+    row_errors,
+    solve,
     upsilon_range,
 )
 
@@ -67,7 +66,7 @@ class _Forces:
         torque = eq.matrix_torque(W, names, R)
         W = hy.subs(W, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
         L = eq.body_momentum(inertia, rates)
-        gyro = _cross(L, rates)
+        gyro = cross_array(L, rates)
         accel = [(gyro[i] + torque[i]) / inertia[i] for i in range(3)]
         exprs = [*torque, *accel, W]
         key = hashlib.sha256(pickle.dumps(exprs) + prec.name.encode()).hexdigest()
@@ -251,7 +250,7 @@ def check_element_equations(
     inertia = prec.array(body.inertia)
     q_start = body.initial_quaternion(prec)
     rates_start = prec.array(body.rates)
-    period = _period(inertia, rates_start)
+    period = free_period(inertia, rates_start)
     if upsilon0 is None:
         upsilon0 = _choose_upsilon0(inertia, rates_start, q_start, t_start, prec)
     else:
@@ -329,26 +328,26 @@ def _pointwise(E: CayleyElements, torque: np.ndarray, accel: np.ndarray) -> dict
     one = 0 * E.k + 1
     explicit = np.array([0 * one] * 4 + [one, 0 * one])
     actual = explicit + J @ xdot
-    dW = _solve(np.array(J.T, copy=True), grad)
+    dW = solve(np.array(J.T, copy=True), grad)
     B = cayley_brackets(E)
     predicted = B @ dW
     a_vec = np.array([E.a, E.b, E.c])
 
-    Jf, s, eta = _floats(J), _column_scales(E), _row_errors(E)
+    Jf, s, eta = floats(J), column_scales(E), row_errors(E)
     rho = np.max(np.abs(Jf) * s[None, :], axis=1)
-    bound_actual = eta * rho * np.sum(np.abs(_floats(xdot)) / s) + SAFETY * eps * _floats(explicit)
-    w_hat = rho * np.abs(_floats(dW))
+    bound_actual = eta * rho * np.sum(np.abs(floats(xdot)) / s) + SAFETY * eps * floats(explicit)
+    w_hat = rho * np.abs(floats(dW))
     J_hat = Jf * s[None, :] / rho[:, None]
-    beta = np.sum(eta * w_hat) + SAFETY * eps * np.abs(s * _floats(grad))
+    beta = np.sum(eta * w_hat) + SAFETY * eps * np.abs(s * floats(grad))
     dw = (np.abs(np.linalg.inv(J_hat.T)) @ beta) / rho
-    Babs = _floats(cayley_brackets(E, absolute=True))
-    bound_predicted = (np.maximum.outer(eta, eta) * Babs) @ np.abs(_floats(dW)) + Babs @ dw
-    k_bound = np.abs(_floats(a_vec)) @ bound_actual[:3] / float(E.k) + dw[5]
+    Babs = floats(cayley_brackets(E, absolute=True))
+    bound_predicted = (np.maximum.outer(eta, eta) * Babs) @ np.abs(floats(dW)) + Babs @ dw
+    k_bound = np.abs(floats(a_vec)) @ bound_actual[:3] / float(E.k) + dw[5]
     return {
         "elements": E,
         "actual": actual,
         "predicted": predicted,
-        "k": (_dot(a_vec, actual[:3]) / E.k, dW[5], k_bound),
+        "k": (dot(a_vec, actual[:3]) / E.k, dW[5], k_bound),
         "bound": bound_actual + bound_predicted,
         "bound_actual": bound_actual,
         "value_error": E.error_bounds,
@@ -369,7 +368,7 @@ def _report(
 ) -> CheckReport:
     elements = [d["elements"] for d in data]
     t_native = np.array([E.t for E in elements])
-    t = _floats(t_native)
+    t = floats(t_native)
     values = np.array([E.values for E in elements])
     actual = np.array([d["actual"] for d in data])
     predicted = np.array([d["predicted"] for d in data])
@@ -381,9 +380,9 @@ def _report(
     series: dict[str, np.ndarray] = {"t": t}
     labels = ("a", "b", "c", "h", "e", "δ")
 
-    diff = np.abs(_floats(actual - predicted))
+    diff = np.abs(floats(actual - predicted))
     for i, name in enumerate(labels):
-        scale = float(np.max(np.abs(_floats(actual[:, i]))))
+        scale = float(np.max(np.abs(floats(actual[:, i]))))
         rows.append(
             CheckRow(
                 f"d{name}/dt: (62) vs actual / law bound",
@@ -392,23 +391,23 @@ def _report(
                 _relative(diff[:, i], scale, f"|d{name}/dt|"),
             )
         )
-        series[f"rate_actual_{ELEMENTS[i]}"] = _floats(actual[:, i])
-        series[f"rate_62_{ELEMENTS[i]}"] = _floats(predicted[:, i])
+        series[f"rate_actual_{ELEMENTS[i]}"] = floats(actual[:, i])
+        series[f"rate_62_{ELEMENTS[i]}"] = floats(predicted[:, i])
         series[f"difference_{ELEMENTS[i]}"] = diff[:, i]
         series[f"bound_{ELEMENTS[i]}"] = bound[:, i]
     k_actual = np.array([d["k"][0] for d in data])
     k_63 = np.array([d["k"][1] for d in data])
     k_bound = np.array([d["k"][2] for d in data])
-    k_diff = np.abs(_floats(k_actual - k_63))
+    k_diff = np.abs(floats(k_actual - k_63))
     rows.append(
         CheckRow(
             "dk/dt: (63) vs actual / law bound",
             float(np.max(k_diff / k_bound)),
             1.0,
-            _relative(k_diff, float(np.max(np.abs(_floats(k_actual)))), "|dk/dt|"),
+            _relative(k_diff, float(np.max(np.abs(floats(k_actual)))), "|dk/dt|"),
         )
     )
-    series["rate_actual_k"], series["rate_63_k"] = _floats(k_actual), _floats(k_63)
+    series["rate_actual_k"], series["rate_63_k"] = floats(k_actual), floats(k_63)
     series["difference_k"] = k_diff
 
     # Interval ends sit at every (nodes + 1)-th sample, the nodes between them.
@@ -425,14 +424,14 @@ def _report(
         run_error = SAFETY * eps_run * (1 + n_interval) * 6 * np.maximum(rho[i0], rho[i1])
         base = value_error[i0] + value_error[i1] + run_error
         h = float(half)
-        w = _floats(weights)
+        w = floats(weights)
         bounds.append(base + h * (w @ bound[inner]))
         bounds_actual.append(base + h * (w @ bound_actual[inner]))
     changes, by_62, by_actual = np.array(changes), np.array(by_62), np.array(by_actual)
     bounds, bounds_actual = np.array(bounds), np.array(bounds_actual)
-    d62 = np.abs(_floats(changes - by_62))
+    d62 = np.abs(floats(changes - by_62))
     for i, name in enumerate(labels):
-        scale = float(np.max(np.abs(_floats(changes[:, i]))))
+        scale = float(np.max(np.abs(floats(changes[:, i]))))
         rows.append(
             CheckRow(
                 f"Δ{name} over an interval vs ∫(62) dt / law bound",
@@ -441,11 +440,11 @@ def _report(
                 _relative(d62[:, i], scale, f"|Δ{name}|"),
             )
         )
-        series[f"change_{ELEMENTS[i]}"] = _floats(changes[:, i])
-        series[f"integral_62_{ELEMENTS[i]}"] = _floats(by_62[:, i])
+        series[f"change_{ELEMENTS[i]}"] = floats(changes[:, i])
+        series[f"integral_62_{ELEMENTS[i]}"] = floats(by_62[:, i])
         series[f"integral_difference_{ELEMENTS[i]}"] = d62[:, i]
         series[f"integral_bound_{ELEMENTS[i]}"] = bounds[:, i]
-    witness = np.abs(_floats(changes - by_actual)) / bounds_actual
+    witness = np.abs(floats(changes - by_actual)) / bounds_actual
     rows.append(
         CheckRow(
             "Δc vs ∫ actual rates dt (quadrature witness) / law bound",
@@ -458,7 +457,7 @@ def _report(
     rows.append(CheckRow("(61) vs J P Jᵀ at every state / law bound", worst.error, 1.0, worst.note))
     series["t_interval_end"] = t[ends[1:]]
     for i, name in enumerate(ELEMENTS):
-        series[f"element_{name}"] = _floats(values[:, i])
+        series[f"element_{name}"] = floats(values[:, i])
     series["free_steps"] = np.array([E.steps for E in elements], dtype=float)
     series["turning_margin"] = np.array([E.turning_margin for E in elements])
     title = (

@@ -38,6 +38,7 @@ import mpmath
 
 from ..core.accuracy import PrecisionNotReached, certify, to_mpf
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
+from ..core.vectors import cross
 
 __all__ = [
     "Euler1758",
@@ -428,7 +429,7 @@ class _EulerConstants:
         self.D = sum(Lb[i] * P[i] for i in range(3))
         self.root_G = mpmath.sqrt(self.G)
         # G − 𝔇² = |L_b × P|² for a unit P: the cross product keeps the digits of a small f.
-        self.f = mpmath.sqrt(sum(x * x for x in _cross(Lb, P)))
+        self.f = mpmath.sqrt(sum(x * x for x in cross(Lb, P)))
         if self.f <= mpmath.mpf("1e-12") * self.root_G:
             raise ValueError(
                 "direction: P is (anti)parallel to the angular momentum to within 1e-12 rad "
@@ -572,12 +573,8 @@ def _switch_quarters(start: ThetaPoint, end: ThetaPoint, offset: mpmath.mpf) -> 
     return [q for q in quarters if before(end, crossing(q)) and before(crossing(q), start)]
 
 
-def _cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
 def _det(a, b, c) -> mpmath.mpf:
-    return sum(a[i] * x for i, x in enumerate(_cross(b, c)))
+    return sum(a[i] * x for i, x in enumerate(cross(b, c)))
 
 
 class Euler1758:

@@ -90,7 +90,7 @@ class FreeBodyJob:
         elif name == "momentum_squared":
             value = sum(x * x for x in L)
         elif name == "momentum_space":
-            from .closed_form import quaternion_rotate
+            from .quadratures import quaternion_rotate
 
             return [self.rounding.write(g)[0] for g in quaternion_rotate(s.quaternion, L)]
         else:  # orthogonality: the closed form's attitude is a rotation by construction

@@ -28,14 +28,14 @@ parameters (one compiled integrator per precision); the attitude enters only thr
 ``(a, b, c)`` and the starting value of α.
 
 **The equations of the elements** (§9.3–9.4): ``dcᵢ/dt = Σⱼ (cᵢ, cⱼ) ∂W/∂cⱼ`` with Cayley's
-brackets (61), which :func:`cayley_brackets` writes out and :func:`element_rates` applies (eq.
-(62)); eq. (63) is ``dk/dt = ∂W/∂δ``. :func:`.element_check.check_element_equations` measures
-them against the elements' actual rates along a forced run, and :func:`check_brackets` (61)
-against ``J P Jᵀ`` (J the Jacobian of the elements in Cayley's canonical variables, P the canonical
-Poisson tensor in his sign). Gradients are taken internally with respect to a body-frame
-rotation ``δR = R[δφ]×`` rather than ``δρ``: regular at every attitude, including θ = π, where
-λ, μ, ν are infinite (``dφ = (2/κ)(I − [ρ]×) dρ`` converts).
-"""
+brackets (61), which :func:`.brackets.cayley_brackets` writes out and
+:func:`.brackets.element_rates` applies (eq. (62)); eq. (63) is ``dk/dt = ∂W/∂δ``.
+:func:`.element_check.check_element_equations` measures them against the elements' actual rates
+along a forced run, and :func:`.brackets.check_brackets` (61) against ``J P Jᵀ`` (J the Jacobian
+of the elements in Cayley's canonical variables, P the canonical Poisson tensor in his sign).
+Gradients are taken internally with respect to a body-frame rotation ``δR = R[δφ]×`` rather than
+``δρ``: regular at every attitude, including θ = π, where λ, μ, ν are infinite (``dφ = (2/κ)(I −
+[ρ]×) dρ`` converts). """
 
 from __future__ import annotations
 
@@ -48,19 +48,15 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
-from ..core.consistency import CheckReport, CheckRow
 from ..core.precision import Precision
+from ..core.vectors import cross, dot
 from . import attitude as att
 
 __all__ = [
     "ELEMENTS",
     "TURNING_MARGIN",
     "CayleyElements",
-    "cayley_brackets",
     "cayley_elements",
-    "check_brackets",
-    "element_rates",
-    "poisson_brackets",
     "upsilon_range",
 ]
 
@@ -81,28 +77,23 @@ _HALF_WINDOW = 0.55
 
 
 # ---------------------------------------------------------------------- small vector helpers
-def _cross(x: Any, y: Any) -> np.ndarray:
-    return np.array(
-        [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]]
-    )
+def cross_array(x: Any, y: Any) -> np.ndarray:
+    """x × y as an array, for the numpy arithmetic it enters."""
+    return np.array(cross(x, y))
 
 
-def _dot(x: Any, y: Any) -> Any:
-    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
-
-
-def _skew(x: Any) -> np.ndarray:
+def skew(x: Any) -> np.ndarray:
     """``[x]×``: ``[x]× y = x × y``."""
     zero = 0 * x[0]
     return np.array([[zero, -x[2], x[1]], [x[2], zero, -x[0]], [-x[1], x[0], zero]])
 
 
-def _eye(n: int, like: Any) -> np.ndarray:
+def eye(n: int, like: Any) -> np.ndarray:
     one, zero = 0 * like + 1, 0 * like
     return np.array([[one if i == j else zero for j in range(n)] for i in range(n)])
 
 
-def _solve(M: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+def solve(M: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """``M x = rhs`` in M's number type (numpy's LAPACK for double, elimination otherwise)."""
     if M.dtype == np.float64:
         return np.linalg.solve(M, rhs)
@@ -124,7 +115,7 @@ def _solve(M: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return x
 
 
-def _floats(x: Any) -> np.ndarray:
+def floats(x: Any) -> np.ndarray:
     return np.array([float(v) for v in np.ravel(x)]).reshape(np.shape(x))
 
 
@@ -146,10 +137,10 @@ class _FreeFlow:
         A, B, C = hy.par[0], hy.par[1], hy.par[2]
         a = [hy.par[3], hy.par[4], hy.par[5]]
         L = [A * p, B * q, C * r]
-        k2 = _dot(a, a)
-        upsilon = (k2 + _dot(a, L)) / 2
-        h = _dot(L, [p, q, r])
-        Phi = _dot(a, [p, q, r])
+        k2 = dot(a, a)
+        upsilon = (k2 + dot(a, L)) / 2
+        h = dot(L, [p, q, r])
+        Phi = dot(a, [p, q, r])
         system = [
             (p, (B - C) / A * q * r),
             (q, (C - A) / B * r * p),
@@ -204,7 +195,7 @@ def _flow(prec: Precision) -> _FreeFlow:
     return _FLOWS[prec.name]
 
 
-def _period(inertia: np.ndarray, rates: np.ndarray) -> float:
+def free_period(inertia: np.ndarray, rates: np.ndarray) -> float:
     """The period of (p, q, r) in the free motion, 4K(m)/n (a search window: double is enough)."""
     I = [float(x) for x in inertia]  # noqa: E741
     w = [float(x) for x in rates]
@@ -293,7 +284,7 @@ class CayleyElements:
         """``|V₀| / (k |L_b| |ω|)`` at the passage: 0 at a turning value of υ, at most 1."""
         L0 = self.inertia * np.array(self.passage_rates)
         w0 = np.array(self.passage_rates)
-        scale = float(self.k) * math.sqrt(float(_dot(L0, L0)) * float(_dot(w0, w0)))
+        scale = float(self.k) * math.sqrt(float(dot(L0, L0)) * float(dot(w0, w0)))
         return abs(float(self.V0)) / scale
 
     @property
@@ -301,9 +292,9 @@ class CayleyElements:
         """The round-off law's bound on the error of each element (floats; see
         :func:`.element_check.check_element_equations`): as under a state error of relative size ηᵢ,
         ``ηᵢ(6ρᵢ + |cᵢ|)``."""
-        J = _floats(self.rotation_jacobian)
-        rho = np.max(np.abs(J) * _column_scales(self)[None, :], axis=1)
-        return _row_errors(self) * (6 * rho + np.abs(_floats(self.values)))
+        J = floats(self.rotation_jacobian)
+        rho = np.max(np.abs(J) * column_scales(self)[None, :], axis=1)
+        return row_errors(self) * (6 * rho + np.abs(floats(self.values)))
 
     def jacobian(self, coordinates: str = "rodrigues") -> np.ndarray:
         """∂(a, b, c, h, e, δ)/∂x at fixed t, a 6×6 array (rows: the elements).
@@ -329,7 +320,7 @@ class CayleyElements:
                 "use coordinates='rotation'"
             )
         # dφ = (2/κ)(I − [ρ]×) dρ with ρ = v/w, κ = 1/w².
-        dphi_drho = 2 * w * w * _eye(3, w) - 2 * w * _skew(v)
+        dphi_drho = 2 * w * w * eye(3, w) - 2 * w * skew(v)
         if coordinates == "rodrigues":
             out = J.copy()
             out[:, :3] = J[:, :3] @ dphi_drho
@@ -345,18 +336,18 @@ class CayleyElements:
         w, v = self.quaternion[0], self.quaternion[1:]
         rho = v / w
         L = self.inertia * self.rates
-        momenta = 2 * w * w * (L + _cross(rho, L))
+        momenta = 2 * w * w * (L + cross_array(rho, L))
         return np.concatenate([rho, momenta])
 
     def _canonical_map(self, dphi_drho: np.ndarray) -> np.ndarray:
         """∂(φ, ω)/∂(ρ, u⃗): 2L_b = (I − [ρ]× + ρρᵀ) u⃗ (eq. (30))."""
         x = self.canonical_state()
         rho, u = x[:3], x[3:]
-        one = _eye(3, rho[0])
+        one = eye(3, rho[0])
         outer = np.array([[rho[i] * u[j] for j in range(3)] for i in range(3)])
-        dL_drho = (_skew(u) + _dot(rho, u) * one + outer) / 2
+        dL_drho = (skew(u) + dot(rho, u) * one + outer) / 2
         rr = np.array([[rho[i] * rho[j] for j in range(3)] for i in range(3)])
-        dL_du = (one - _skew(rho) + rr) / 2
+        dL_du = (one - skew(rho) + rr) / 2
         inv = np.array([1 / m for m in self.inertia])
         K = np.empty((6, 6), dtype=dphi_drho.dtype)
         K[:3, :3] = dphi_drho
@@ -377,7 +368,7 @@ def _quaternion_of(rodrigues: Any, quaternion: Any, prec: Precision) -> np.ndarr
     quat = prec.array(quaternion)
     if len(quat) != 4:
         raise ValueError(f"quaternion: needs 4 numbers (w, x, y, z), got {len(quat)}")
-    norm = np.sqrt(_dot(quat[1:], quat[1:]) + quat[0] * quat[0])
+    norm = np.sqrt(dot(quat[1:], quat[1:]) + quat[0] * quat[0])
     if not float(norm) > 0:
         raise ValueError("quaternion: must not be zero")
     return quat / norm
@@ -390,7 +381,7 @@ def _state(inertia: Any, rates: Any, rodrigues: Any, quaternion: Any, prec: Prec
         raise ValueError(f"inertia: needs three positive moments, got {list(inertia)}")
     if len(w) != 3:
         raise ValueError(f"rates: needs 3 numbers, got {len(w)}")
-    if float(_dot(w, w)) == 0:
+    if float(dot(w, w)) == 0:
         raise ValueError("rates: the body is at rest; its elements are undefined")
     return I, w, _quaternion_of(rodrigues, quaternion, prec)
 
@@ -399,11 +390,11 @@ def _alpha_and_gradient(quat: np.ndarray, inertia: np.ndarray, rates: np.ndarray
     """α = 2 tan⁻¹(Ω/k) from the quaternion (regular at θ = π), and ∂α/∂(φ, ω)."""
     w, v = quat[0], quat[1:]
     L = inertia * rates
-    k = np.sqrt(_dot(L, L))
-    vL = _dot(v, L)
+    k = np.sqrt(dot(L, L))
+    vL = dot(v, L)
     alpha = 2 * np.arctan2(vL, w * k)
     denominator = w * w * k * k + vL * vL
-    d_phi = k * (w * w * L - w * _cross(v, L) + vL * v) / denominator
+    d_phi = k * (w * w * L - w * cross_array(v, L) + vL * v) / denominator
     d_rates = 2 * w * (k * v - vL * L / k) * inertia / denominator
     return alpha, np.concatenate([d_phi, d_rates])
 
@@ -460,10 +451,10 @@ def cayley_elements(
     L = I * w
     R = np.array(att.quaternion_to_matrix(list(quat)))
     a_vec = R @ L
-    k = np.sqrt(_dot(a_vec, a_vec))
-    h = _dot(L, w)
+    k = np.sqrt(dot(a_vec, a_vec))
+    h = dot(L, w)
     alpha0, d_alpha = _alpha_and_gradient(quat, I, w)
-    period = _period(I, w)
+    period = free_period(I, w)
 
     flow = _flow(prec)
     z0 = np.array([w[0], w[1], w[2], alpha0])
@@ -476,17 +467,17 @@ def cayley_elements(
     alpha_p = state[3]
     S = np.array([state[flow.ta.get_vslice(order=1, component=i)] for i in range(4)])
     L0 = I * w0
-    wdot0 = _cross(L0, w0) / I
-    V0 = _dot(a_vec, _cross(L0, w0))
-    Phi0 = _dot(a_vec, w0)
-    h0 = _dot(L0, w0)
-    ups = (k * k + _dot(a_vec, L0)) / 2
+    wdot0 = cross_array(L0, w0) / I
+    V0 = dot(a_vec, cross_array(L0, w0))
+    Phi0 = dot(a_vec, w0)
+    h0 = dot(L0, w0)
+    ups = (k * k + dot(a_vec, L0)) / 2
     alpha_rate = k * (h0 + Phi0) / (2 * ups)
     # g = (k² + a·L_b)/2 − υ₀ with k² = a·a: its gradient in z* and its explicit a-dependence.
     g_z = np.concatenate([a_vec * I / 2, [0 * k]])
     g_a = a_vec + L0 / 2
     g_dot = V0 / 2
-    margin = abs(float(V0)) / (float(k) * math.sqrt(float(_dot(L0, L0)) * float(_dot(w0, w0))))
+    margin = abs(float(V0)) / (float(k) * math.sqrt(float(dot(L0, L0)) * float(dot(w0, w0))))
     if margin < TURNING_MARGIN:
         raise ValueError(
             f"upsilon0: {float(ups0):.17g} is a turning value of υ for this motion "
@@ -494,7 +485,7 @@ def cayley_elements(
             "(60) divide by V₀; choose a value inside the range of υ"
         )
     # One Newton step absorbs the event's residual g(z*) ≈ ε.
-    shift = -((k * k + _dot(a_vec, L0)) / 2 - ups0) / g_dot
+    shift = -((k * k + dot(a_vec, L0)) / 2 - ups0) / g_dot
     tau, alpha_p, w0 = tau + shift, alpha_p + alpha_rate * shift, w0 + wdot0 * shift
     L0 = I * w0
     dg_dy = g_z @ S
@@ -505,9 +496,9 @@ def cayley_elements(
     # y = (p, q, r, α₀, a, b, c) as functions of x = (φ, ω).
     Y = np.empty((7, 6), dtype=S.dtype)
     Y[:3, :3] = 0 * S[:3, :3]
-    Y[:3, 3:] = _eye(3, k)
+    Y[:3, 3:] = eye(3, k)
     Y[3] = d_alpha
-    da_dphi = -R @ _skew(L)
+    da_dphi = -R @ skew(L)
     da_drates = R * I[None, :]
     Y[4:, :3] = da_dphi
     Y[4:, 3:] = da_drates
@@ -534,8 +525,8 @@ def cayley_elements(
         upsilon0=ups0,
         k=k,
         passage_rates=(w0[0], w0[1], w0[2]),
-        V0=_dot(a_vec, _cross(L0, w0)),
-        Phi0=_dot(a_vec, w0),
+        V0=dot(a_vec, cross_array(L0, w0)),
+        Phi0=dot(a_vec, w0),
         alpha=alpha0,
         quaternion=quat,
         rates=w,
@@ -618,14 +609,14 @@ class _TurningFlow:
             rates = ta.d_output[:3]
             Lt = np.array(ta.pars[:3]) * rates
             a_vec = np.array(ta.pars[3:6])
-            self.values.append((_dot(a_vec, a_vec) + _dot(a_vec, Lt)) / 2)
+            self.values.append((dot(a_vec, a_vec) + dot(a_vec, Lt)) / 2)
 
         zero = prec.number(0)
         self.ta = hy.taylor_adaptive(
             system,
             np.array([zero] * 3),
             pars=np.array([zero] * 6),
-            nt_events=[hy.nt_event(_dot(a, _cross(L, [p, q, r])), record, **ev_kw)],
+            nt_events=[hy.nt_event(dot(a, cross_array(L, [p, q, r])), record, **ev_kw)],
             compact_mode=True,
             **kw,
         )
@@ -672,144 +663,17 @@ def upsilon_range(
     I, w, quat = _state(inertia, rates, rodrigues, quaternion, prec)  # noqa: E741
     a_vec = np.array(att.quaternion_to_matrix(list(quat))) @ (I * w)
     pars = np.array([I[0], I[1], I[2], a_vec[0], a_vec[1], a_vec[2]])
-    return _upsilon_range_of(w, pars, _period(I, w), prec)
-
-
-# ---------------------------------------------------------------------- brackets and rates
-def cayley_brackets(elements: CayleyElements, absolute: bool = False) -> np.ndarray:
-    """Cayley's brackets ``(cᵢ, cⱼ)`` of the elements, eq. (61), as a 6×6 antisymmetric array.
-
-    Rows and columns in the order :data:`ELEMENTS`. With ``absolute`` every entry is instead the
-    sum of the absolute values of its terms (the scale of its rounding, for error bounds).
-    """
-    E = elements
-    avec = np.array([E.a, E.b, E.c])
-    L0 = E.inertia * np.array(E.passage_rates)
-    k, V0, ups0, h, Phi0 = E.k, E.V0, E.upsilon0, E.h, E.Phi0
-    if absolute:
-        avec, L0 = np.abs(avec), np.abs(L0)
-        V0, ups0, h, Phi0 = abs(V0), abs(ups0), abs(h), abs(Phi0)
-        # (bCr₀ − cBq₀, …) with both products counted positive.
-        cross = np.array([avec[(i + 1) % 3] * L0[(i + 2) % 3] for i in range(3)]) + np.array(
-            [avec[(i + 2) % 3] * L0[(i + 1) % 3] for i in range(3)]
-        )
-        sign = 1
-    else:
-        cross = _cross(avec, L0)  # (bCr₀ − cBq₀, cAp₀ − aCr₀, aBq₀ − bAp₀)
-        sign = -1
-    zero = 0 * k
-    B = np.array([[zero] * 6 for _ in range(6)])
-    # (40): (a, b) = −c, (b, c) = −a, (c, a) = −b; the upper triangle holds (a, c) = +b.
-    B[0, 1], B[1, 2], B[0, 2] = sign * avec[2], sign * avec[0], (1 if absolute else -sign) * avec[1]
-    for i in range(3):
-        B[i, 4] = sign * cross[i] / V0  # (47)
-        B[i, 5] = k / (2 * ups0) * (avec[i] + L0[i] + sign * (h + Phi0) / V0 * cross[i])  # (54)
-    B[3, 4] = zero + 2 * sign  # (52)
-    B[4, 5] = 4 * sign * k / V0  # (60)
-    for i in range(6):
-        for j in range(i):
-            B[i, j] = B[j, i] if absolute else -B[j, i]
-    return B
-
-
-def element_rates(elements: CayleyElements, dW_dc: Sequence[Any]) -> np.ndarray:
-    """The right-hand sides of (62): ``dcᵢ/dt = Σⱼ (cᵢ, cⱼ) ∂W/∂cⱼ``.
-
-    Parameters
-    ----------
-    elements
-        The elements (their passage quantities p₀, q₀, r₀, V₀, Φ₀ enter the brackets).
-    dW_dc
-        ∂W/∂(a, b, c, h, e, δ), W the force function as a function of the elements and t.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``d(a, b, c, h, e, δ)/dt``. Eq. (63), ``dk/dt``, is ``dW_dc[5]``.
-    """
-    return cayley_brackets(elements) @ np.asarray(dW_dc)
-
-
-def poisson_brackets(elements: CayleyElements) -> np.ndarray:
-    """``J P Jᵀ``: the brackets of the elements from their Jacobian J in canonical variables.
-
-    P is the canonical Poisson tensor in Cayley's sign (§9.3),
-    ``(f, g) = Σ ∂f/∂u ∂g/∂λ − ∂f/∂λ ∂g/∂u``, i.e. ``P = [[0, −I], [I, 0]]`` over
-    (λ, μ, ν, u, v, w). Equal to :func:`cayley_brackets` where the elements are right.
-    """
-    J = elements.jacobian("canonical")
-    return J @ _canonical_tensor(J) @ J.T
-
-
-def _canonical_tensor(like: np.ndarray) -> np.ndarray:
-    zero = 0 * like[0, 0]
-    P = np.array([[zero] * 6 for _ in range(6)])
-    for i in range(3):
-        P[i, 3 + i] = zero - 1
-        P[3 + i, i] = zero + 1
-    return P
+    return _upsilon_range_of(w, pars, free_period(I, w), prec)
 
 
 # ---------------------------------------------------------------------- the round-off law
-def _row_errors(E: CayleyElements) -> np.ndarray:
+def row_errors(E: CayleyElements) -> np.ndarray:
     """η: relative error level of each element's row of the Jacobian (see the check's law)."""
     eps = E.precision.epsilon
     integrated = SAFETY * eps * (1 + E.steps) / E.turning_margin
     return np.array([SAFETY * eps] * 4 + [integrated] * 2)
 
 
-def _column_scales(E: CayleyElements) -> np.ndarray:
-    wn = math.sqrt(float(_dot(E.rates, E.rates)))
+def column_scales(E: CayleyElements) -> np.ndarray:
+    wn = math.sqrt(float(dot(E.rates, E.rates)))
     return np.array([1.0, 1.0, 1.0, wn, wn, wn])
-
-
-def check_brackets(elements: CayleyElements) -> CheckReport:
-    """Measure Cayley's brackets (61) against ``J P Jᵀ`` at the state of ``elements``.
-
-    Away from the passage (t ≠ e) this tests the brackets' constancy as well as their values.
-    Bound per entry, from the round-off law of
-    :func:`.element_check.check_element_equations`: row i of J, its columns scaled by
-    (1, 1, 1, |ω|, |ω|, |ω|), errs by ``ηᵢ ρᵢ`` (ρᵢ its largest scaled entry);
-    it propagates to ``(J P Jᵀ)ᵢₗ`` through the conversion K to canonical variables,
-    and (61) errs by ``max(ηᵢ, ηₗ)`` times the absolute sum of its terms.
-    """
-    E = elements
-    Jc = E.jacobian("canonical")
-    P = _canonical_tensor(Jc)
-    native_mine, native_cayley = Jc @ P @ Jc.T, cayley_brackets(E)
-    mine, cayley = _floats(native_mine), _floats(native_cayley)
-    bound = _bracket_bounds(E)
-    ratio = np.abs(_floats(native_mine - native_cayley)) / bound
-    i, j = np.unravel_index(np.argmax(np.triu(ratio, 1)), ratio.shape)
-    rows = [
-        CheckRow(
-            "(61) vs J P Jᵀ, 15 brackets / law bound",
-            float(np.max(np.triu(ratio, 1))),
-            1.0,
-            f"worst ({ELEMENTS[i]}, {ELEMENTS[j]}): {mine[i, j]:.6e} vs {cayley[i, j]:.6e}; "
-            f"t − e = {float(E.t - E.e):.3g}",
-        )
-    ]
-    return CheckReport(
-        "Cayley 1846 brackets (61) against J P Jᵀ",
-        tuple(rows),
-        {"J_P_Jt": mine, "brackets_61": cayley, "bound": bound},
-    )
-
-
-def _bracket_bounds(E: CayleyElements) -> np.ndarray:
-    J = _floats(E.rotation_jacobian)
-    s = _column_scales(E)
-    eta = _row_errors(E)
-    rho = np.max(np.abs(J) * s[None, :], axis=1)
-    w, v = E.quaternion[0], E.quaternion[1:]
-    dphi_drho = 2 * w * w * _eye(3, w) - 2 * w * _skew(v)
-    K = _floats(E._canonical_map(dphi_drho))
-    Jc = np.abs(_floats(E.jacobian("canonical")))
-    P = np.abs(_floats(_canonical_tensor(E.rotation_jacobian)))
-    kappa_cols = np.sum(np.abs(K) / s[:, None], axis=0)  # error of J_can per unit row error
-    spread = (kappa_cols[None, :] @ P @ Jc.T)[0]  # (κ|P||J_can|ᵀ)_l
-    prop = np.outer(eta * rho, spread)
-    Babs = _floats(cayley_brackets(E, absolute=True))
-    tiny = np.finfo(float).tiny
-    return prop + prop.T + np.maximum.outer(eta, eta) * Babs + tiny

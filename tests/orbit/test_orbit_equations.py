@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from cayley_heyoka import Scene
+from cayley_heyoka.core import vectors
 from cayley_heyoka.core.families import FAMILIES
 from cayley_heyoka.core.model import ParTable
 from cayley_heyoka.mechanics import frames
@@ -77,7 +78,7 @@ def literal_rhs(scene):
     t = hy.time
     theta, phi = th0 + th1 * t, ph0 + ph1 * t
     sigma = pars.add("sg0", plane.sigma0) + th1 * (hy.sin(phi) - hy.sin(ph0)) / ph1
-    M02 = frames.matmul(
+    M02 = vectors.matmul(
         frames.plane_matrix(theta, sigma, phi), frames.plane_matrix(Theta, Sigma, Phi)
     )
     x = [r * (M02[i][0] * hy.cos(rho) + M02[i][1] * hy.sin(rho)) for i in range(3)]

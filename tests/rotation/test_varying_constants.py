@@ -10,17 +10,12 @@ import pytest
 
 import cayley_heyoka as ch
 from cayley_heyoka.core.errors import SceneError
+from cayley_heyoka.rotation import brackets as br
 from cayley_heyoka.rotation import element_check as ec
-from cayley_heyoka.rotation import varying_constants as vc
+from cayley_heyoka.rotation.brackets import cayley_brackets, check_brackets, element_rates
 from cayley_heyoka.rotation.cayley1846 import Cayley1846
 from cayley_heyoka.rotation.element_check import check_element_equations
-from cayley_heyoka.rotation.varying_constants import (
-    cayley_brackets,
-    cayley_elements,
-    check_brackets,
-    element_rates,
-    upsilon_range,
-)
+from cayley_heyoka.rotation.varying_constants import cayley_elements, upsilon_range
 
 # Free motions of the brackets' check (Cayley 1846): near the axis of largest moment and
 # near the axis of least moment, each with a general attitude.
@@ -200,7 +195,7 @@ def test_element_equations_along_a_weakly_forced_run(forces, formulation):
 
 
 def test_a_wrong_bracket_sign_is_caught(monkeypatch):
-    right = vc.cayley_brackets
+    right = br.cayley_brackets
 
     def wrong(elements, absolute=False):
         B = right(elements, absolute)
@@ -208,7 +203,7 @@ def test_a_wrong_bracket_sign_is_caught(monkeypatch):
             B[3, 4], B[4, 3] = -B[3, 4], -B[4, 3]  # (h, e) = +2
         return B
 
-    for module in (vc, ec):
+    for module in (br, ec):
         monkeypatch.setattr(module, "cayley_brackets", wrong)
     report = check_element_equations(_scene(HEAVY_TOP, stop="4"))
     failed = {row.quantity.split(":")[0].split(" ")[0] for row in report.rows if not row.passed}
@@ -218,7 +213,7 @@ def test_a_wrong_bracket_sign_is_caught(monkeypatch):
 
 def test_a_small_error_in_V0_is_caught(monkeypatch):
     """The law's bounds are tight enough to see (e, δ) = −4k/V₀ off by 1e-7 relative."""
-    right = vc.cayley_brackets
+    right = br.cayley_brackets
 
     def slightly_off(elements, absolute=False):
         B = right(elements, absolute)
@@ -226,7 +221,7 @@ def test_a_small_error_in_V0_is_caught(monkeypatch):
             B[4, 5], B[5, 4] = B[4, 5] * (1 + 1e-7), B[5, 4] * (1 + 1e-7)
         return B
 
-    for module in (vc, ec):
+    for module in (br, ec):
         monkeypatch.setattr(module, "cayley_brackets", slightly_off)
     report = check_element_equations(_scene(GRAVITY_GRADIENT, stop="4"))
     assert not report.passed

@@ -29,7 +29,7 @@ import mpmath
 
 from ...core.model import ParTable
 from ...core.precision import Number, Precision, exact_fraction, fraction_text
-from ...mechanics.frames import dot
+from ...core.vectors import dot
 from ..canonical import canonical_equations
 
 Expr = hy.expression
@@ -305,7 +305,7 @@ def element_system(
 
 def angular_momentum(xi: Sequence[Sequence[Expr]], p: Sequence[Sequence[Expr]]) -> list[Expr]:
     """Σ ξᵢ × pᵢ (conserved by (F2.): see :func:`.system.angular_momentum`)."""
-    from ...mechanics.frames import cross
+    from ...core.vectors import cross
 
     rows = [cross(list(x), list(q)) for x, q in zip(xi, p, strict=True)]
     return [hy.sum([r[j] for r in rows]) for j in range(3)]

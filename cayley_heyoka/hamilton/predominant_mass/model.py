@@ -20,7 +20,7 @@ import mpmath
 
 from ...core.errors import SceneError
 from ...core.model import Model, ParTable
-from ...core.precision import Number, exact_fraction
+from ...core.precision import Number, scene_mpf
 from ...core.scene import Scene
 from ..outputs import select_monitors, user_events, wants_principal_function
 from ..scene import Hamiltonian
@@ -124,20 +124,22 @@ def initial_state(ham: Hamiltonian, t: Number, dps: int) -> list[str]:
     from the scene's exact numbers, so a real128 or multiprecision run starts exactly.
     """
     with mpmath.workdps(dps):
-        G, M = _mpf(ham.constants["G"]), _mpf(ham.constants["central_mass"])
+        G, M = scene_mpf(ham.constants["G"]), scene_mpf(ham.constants["central_mass"])
         states = [
             body.state(ham.constants["central_mass"], ham.constants["G"]) for body in ham.bodies
         ]
         if ham.formulation == "canonical":
             values = [v for x, _ in states for v in x]
             values += [
-                _mpf(b.mass) * v for b, (_, xp) in zip(ham.bodies, states, strict=True) for v in xp
+                scene_mpf(b.mass) * v
+                for b, (_, xp) in zip(ham.bodies, states, strict=True)
+                for v in xp
             ]
         else:
             values = []
             for k, (body, (x, xp)) in enumerate(zip(ham.bodies, states, strict=True)):
                 try:
-                    z = planets.hamilton_elements(x, xp, _mpf(t), _mpf(body.mass), M, G)
+                    z = planets.hamilton_elements(x, xp, scene_mpf(t), scene_mpf(body.mass), M, G)
                 except ValueError as exc:  # the scene's checks refuse these first
                     raise SceneError(f"hamiltonian.bodies[{k}]", str(exc)) from None
                 values += list(z.as_tuple())
@@ -147,11 +149,3 @@ def initial_state(ham: Hamiltonian, t: Number, dps: int) -> list[str]:
 def _start_time(scene: Scene) -> Number:
     out = scene.output
     return out.times[0] if out.times is not None else out.grid[0]
-
-
-def _mpf(value: Any) -> mpmath.mpf:
-    """A scene number exactly (at the current precision)."""
-    if isinstance(value, mpmath.mpf):
-        return value
-    f = exact_fraction(value)
-    return mpmath.mpf(f.numerator) / f.denominator

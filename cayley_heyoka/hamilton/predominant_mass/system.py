@@ -54,8 +54,8 @@ import mpmath
 import numpy as np
 
 from ...core.accuracy import to_mpf
+from ...core.vectors import cross, dot
 from ...mechanics import kepler as el
-from ...mechanics.frames import cross, dot
 
 __all__ = [
     "HamiltonElements",
