@@ -152,3 +152,18 @@ def test_no_module_is_too_long():
         if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES
     }
     assert long == {}
+
+
+def test_no_module_takes_another_modules_private_names():
+    import ast
+
+    taken = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (
+                node.level or (node.module or "").split(".")[0] == "cayley_heyoka"
+            ):
+                private = [a.name for a in node.names if a.name.startswith("_")]
+                if private:
+                    taken.append(f"{path.relative_to(PACKAGE.parent)}: {private}")
+    assert taken == []

@@ -358,7 +358,7 @@ class Scene:
             raise SceneError("events", "must be a table of [events.NAME] tables")
         events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
         model = spec.parse({k: data[k] for k in spec.tables if k in data})
-        scene = cls(family, model, integrator, output, events, title, _plain(data))
+        scene = cls(family, model, integrator, output, events, title, plain_copy(data))
         if spec.check is not None:
             spec.check(scene)
         return scene
@@ -370,7 +370,7 @@ class Scene:
 
     def to_dict(self) -> dict[str, Any]:
         """The plain dictionary this scene was built from."""
-        return _plain(self.source)
+        return plain_copy(self.source)
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -436,12 +436,12 @@ def parse_toml(text: str, what: str = "scene") -> dict[str, Any]:
     return data
 
 
-def _plain(data: Any) -> Any:
+def plain_copy(data: Any) -> Any:
     """Deep copy into JSON-friendly types (Fractions and numpy scalars become text)."""
     if isinstance(data, Mapping):
-        return {str(k): _plain(v) for k, v in data.items()}
+        return {str(k): plain_copy(v) for k, v in data.items()}
     if isinstance(data, list | tuple):
-        return [_plain(v) for v in data]
+        return [plain_copy(v) for v in data]
     if isinstance(data, Fraction | np.generic):
         return str(data)
     return data

@@ -35,7 +35,7 @@ along a forced run, and :func:`.brackets.check_brackets` (61) against ``J P Jᵀ
 of the elements in Cayley's canonical variables, P the canonical Poisson tensor in his sign).
 Gradients are taken internally with respect to a body-frame rotation ``δR = R[δφ]×`` rather than
 ``δρ``: regular at every attitude, including θ = π, where λ, μ, ν are infinite (``dφ = (2/κ)(I −
-[ρ]×) dρ`` converts). """
+[ρ]×) dρ`` converts)."""
 
 from __future__ import annotations
 

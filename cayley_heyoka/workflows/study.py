@@ -36,7 +36,7 @@ import numpy as np
 
 from ..core.errors import SceneError
 from ..core.precision import Number, Precision, exact_fraction, fraction_text
-from ..core.scene import Scene, _plain, check_keys, number, read_toml
+from ..core.scene import Scene, check_keys, number, plain_copy, read_toml
 
 KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")
@@ -204,7 +204,7 @@ class Study:
             )
         run = RunOptions.parse(data.get("run", {}))
         source = {"title": title, "scene": scene, "scene_file": scene_file, "sweep": sweep}
-        return cls(title, scene, scene_file, kind, parameters, count, seed, run, _plain(source))
+        return cls(title, scene, scene_file, kind, parameters, count, seed, run, plain_copy(source))
 
     @property
     def precision(self) -> Precision:
@@ -268,7 +268,7 @@ class Study:
 
     def to_dict(self) -> dict[str, Any]:
         """The study as a plain dictionary, its scene inline (JSON-ready)."""
-        return _plain({**self.source, "run": _run_table(self.run)})
+        return plain_copy({**self.source, "run": _run_table(self.run)})
 
 
 def load_study(path: str | Path) -> Study:
@@ -297,7 +297,7 @@ def _base_scene(spec: Any, base_dir: str | Path | None) -> tuple[dict[str, Any],
         data = read_toml(Path(base_dir or ".") / spec, "scene")
         where = f"scene ({spec})"
     elif isinstance(spec, Mapping):
-        data, where = _plain(spec), "scene"
+        data, where = plain_copy(spec), "scene"
     else:
         raise SceneError("scene", f"must be a file path or a table, got {spec!r}")
     try:
