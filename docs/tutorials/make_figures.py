@@ -3,7 +3,7 @@
 Run from anywhere: ``python docs/tutorials/make_figures.py`` (needs ``pip install -e
 ".[plots]"``; about 10 s, most of it compiling the two scenes the first time). Writes
 ``docs/tutorials/figures/{drift,polhode,crossings,orbit,sweep_drift}.png``: the figures the
-tutorial draws, from the same scenes and study, by :func:`cayley_heyoka.plots.plot_file`.
+tutorial draws, from the same scenes and study, by :func:`cayley_heyoka.workflows.plots.plot_file`.
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import tempfile
 from pathlib import Path
 
 import cayley_heyoka as ch
-from cayley_heyoka.plots import plot_file
-from cayley_heyoka.sweep import load_study, run_sweep
+from cayley_heyoka.workflows.plots import plot_file
+from cayley_heyoka.workflows.sweep import load_study, run_sweep
 
 HERE = Path(__file__).resolve().parent
 EXAMPLES = HERE.parent.parent / "examples"
