@@ -39,7 +39,6 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -54,77 +53,38 @@ if str(HERE) not in sys.path:
 import hamilton_planets  # noqa: E402
 import rotation_cases  # noqa: E402
 from bench_common import Curve, available, fmt, ratios_at_equal_error  # noqa: E402
+from work_precision_bench.cases import (  # noqa: E402
+    EXTENDED_LEVELS,
+    IAS15_EPSILON,
+    J2_ORBIT,
+    LABEL,
+    QUICK_IAS15_EPSILON,
+    QUICK_RTOL,
+    REFERENCE_TOL,
+    ROTATION,
+    RTOL,
+    TINY,
+    heavy_top_data,
+    heavy_top_example,
+    j2_data,
+    j2_initial_state,
+    planets_barycentric,
+    planets_data,
+    quad_tolerances,
+    rotation_data,
+    tolerances,
+    with_integrator,
+)
+from work_precision_bench.records import Case, Point  # noqa: E402
 
 import cayley_heyoka as ch  # noqa: E402
 from cayley_heyoka.core.engine import compile_model  # noqa: E402
 from cayley_heyoka.core.families import FAMILIES  # noqa: E402
 from cayley_heyoka.core.model import own_terminal  # noqa: E402
 from cayley_heyoka.hamilton.predominant_mass import system as hp  # noqa: E402
-from cayley_heyoka.hamilton.predominant_mass.model import initial_state as planets_initial_state  # noqa: E402
-from cayley_heyoka.mechanics import kepler as oe  # noqa: E402
 from cayley_heyoka.reference import FreeRigidBody  # noqa: E402
 
-ROOT = HERE.parent
-
-# ---------------------------------------------------------------------------- the sweeps
-TOL = {
-    "double": ("1e-6", "1e-9", "1e-12", "1e-14", "1e-16"),
-    "quad": ("1e-16", "1e-20", "1e-26", "1e-32"),
-    "real113": ("1e-16", "1e-20", "1e-26", "1e-32"),
-    "real256": ("1e-20", "1e-40", "1e-60", "1e-76"),
-}
-QUICK_TOL = {
-    "double": ("1e-9", "1e-16"),
-    "quad": ("1e-20",),
-    "real113": ("1e-20",),
-    "real256": ("1e-40",),
-}
-SPECS = {"double": "double", "quad": "quad", "real113": {"bits": 113}, "real256": {"bits": 256}}
-LABEL = {"double": "double", "quad": "real128", "real113": "real 113", "real256": "real 256"}
-# DOP853 refuses rtol below 100 ε (scipy raises it to 2.2e-14 with a warning).
-RTOL = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13)
-QUICK_RTOL = (1e-6, 1e-10)
-IAS15_EPSILON = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, None)  # None: REBOUND's default
-QUICK_IAS15_EPSILON = (1e-4, None)
-# Error levels of the ratio tables: double-accessible ones against our best double
-# formulation, extended ones against our best real128 formulation.
-DOUBLE_LEVELS = (1e-8, 1e-11, 1e-13)
-EXTENDED_LEVELS = (1e-20, 1e-30)
-REFERENCE_TOL = "1e-32"
-TINY = 1e-6  # the span of the run that measures run()'s fixed cost
 REPEAT, BUDGET = 5, 1.0  # timing: least of up to REPEAT calls, fewer once a call exceeds BUDGET s
-
-
-# ---------------------------------------------------------------------------- records
-@dataclass
-class Point:
-    """One sweep point: a method at one setting."""
-
-    method: str
-    setting: str
-    steps: int | None
-    wall: float  # seconds of integration (ours: the stepping alone, see Stepper)
-    error: float
-    run_wall: float | None = None  # ours: the whole run() call
-    compile: float | None = None  # ours: seconds of the first run's compile (0: cache hit)
-    extra: str = ""
-    order: int | None = None  # ours: the Taylor order heyoka chose for the tolerance
-
-
-@dataclass
-class Case:
-    """Everything one case reports: its points, notes and how to rank them."""
-
-    name: str
-    title: str
-    error_measure: str
-    reference: str
-    points: list[Point] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    fixed_cost: dict[str, float] = field(default_factory=dict)
-    rhs_call: float | None = None  # seconds per right-hand-side call from scipy
-    missing: list[str] = field(default_factory=list)
-    levels: tuple[float, ...] = DOUBLE_LEVELS + EXTENDED_LEVELS
 
 
 def _mp(x: Any) -> mpmath.mpf:
@@ -139,14 +99,6 @@ def _log(msg: str) -> None:
 
 
 # ---------------------------------------------------------------------------- our side
-def _with(data: dict, precision: str, tolerance: str, times: list) -> ch.Scene:
-    d = copy.deepcopy(data)
-    d["integrator"] = {**d.get("integrator", {}), "precision": SPECS[precision]}
-    d["integrator"]["tolerance"] = tolerance
-    d.setdefault("output", {})["times"] = list(times)
-    return ch.Scene.from_dict(d)
-
-
 class Stepper:
     """``run``'s compiled integrator, stepped over the scene's span without ``run``'s fixed cost.
 
@@ -211,7 +163,7 @@ def ours(
     method = f"ours {formulation}, {LABEL[precision]}{label}"
     results = {}
     for tol in tolerances:
-        scene = _with(data, precision, tol, [0.0, t_end])
+        scene = with_integrator(data, precision, tol, [0.0, t_end])
         first = ch.run(scene)  # compiles (or finds the code in heyoka's disk cache)
         compile_s = first.metadata["compile_seconds"]
         stepper = Stepper(scene, first.counters["steps"])
@@ -228,7 +180,7 @@ def ours(
         wall = min(wall, run_wall)
         # run()'s own cost, from a span of one step: the same at every tolerance, so the least
         # over the sweep is the least disturbed measurement.
-        tiny = _with(data, precision, tol, [0.0, TINY])
+        tiny = with_integrator(data, precision, tol, [0.0, TINY])
         fixed = _least(lambda tiny=tiny: ch.run(tiny), 2 * REPEAT)[0]
         case.fixed_cost[method] = min(case.fixed_cost.get(method, math.inf), fixed)
         steps = result.counters["steps"]
@@ -255,26 +207,6 @@ def ours(
     return results
 
 
-def _tol(quick: bool, precision: str) -> tuple[str, ...]:
-    return (QUICK_TOL if quick else TOL)[precision]
-
-
-def _quad(quick: bool, k: int, reference: bool = False) -> tuple[str, ...]:
-    """The real128 tolerances of the ``k``-th formulation of a case.
-
-    ``reference``: the case's reference is formulation 0 at 1e-32 (not run twice); the others
-    get one point (real128 compiles take 5–60 s each at high order, and the reference is
-    checked by :func:`reference_check`). The quick run sweeps formulation 0 only.
-    """
-    if quick:
-        return QUICK_TOL["quad"] if k == 0 else ()
-    if not reference:
-        return TOL["quad"]
-    if k == 0:
-        return tuple(t for t in TOL["quad"] if t != REFERENCE_TOL)
-    return ("1e-20",)
-
-
 def high_accuracy(case: Case, data: dict, formulation: str, t_end: Any, error: Callable) -> None:
     """The tightest double tolerances again with heyoka's compensated evaluation of the Taylor
     polynomials (``integrator.high_accuracy``): does our round-off floor move?"""
@@ -287,7 +219,7 @@ def reference_check(
 ) -> None:
     """The reference's own error: another formulation (other variables, other equations) in
     real128 at the reference's tolerance, run once, untimed."""
-    other = ch.run(_with(data, "quad", REFERENCE_TOL, [0.0, t_end]))
+    other = ch.run(with_integrator(data, "quad", REFERENCE_TOL, [0.0, t_end]))
     case.notes.append(
         f"The reference's own error: the {formulation} formulation in real128 at "
         f"{REFERENCE_TOL} (other variables and equations) differs from it by "
@@ -297,7 +229,7 @@ def reference_check(
 
 def reference_run(data: dict, t_end: Any) -> ch.Result:
     """The real128 reference at tolerance 1e-32."""
-    return ch.run(_with(data, "quad", REFERENCE_TOL, [0.0, t_end]))
+    return ch.run(with_integrator(data, "quad", REFERENCE_TOL, [0.0, t_end]))
 
 
 # ---------------------------------------------------------------------------- scipy
@@ -436,9 +368,6 @@ def ias15_sweep(
 
 
 # ---------------------------------------------------------------------------- error measures
-ROTATION = ("p", "q", "r", "qw", "qx", "qy", "qz")
-
-
 def rotation_error(values: Sequence[Any], ref: Sequence[Any]) -> float:
     """max(|Δω|/|ω_ref|, quaternion distance up to sign) between (p, q, r, qw, qx, qy, qz)."""
     with mpmath.workdps(90):
@@ -465,13 +394,6 @@ def closed_form_end(inertia, rates, t_end: float, dps: int) -> list[mpmath.mpf]:
 
 
 # ---------------------------------------------------------------------------- the cases
-def _rotation_data(case: rotation_cases.Case, formulation: str) -> dict:
-    d = case.scene("double", [0.0, 1.0], events=False, formulation=formulation)
-    d["output"]["monitors"] = []
-    d.pop("events", None)
-    return d
-
-
 def free_body(name: str, key: str, periods: float, quick: bool) -> Case:
     rc = rotation_cases.BY_NAME[key]
     body = FreeRigidBody(rc.inertia, rc.rates, attitude=(1.0, 0.0, 0.0, 0.0), dps=30)
@@ -493,10 +415,10 @@ def free_body(name: str, key: str, periods: float, quick: bool) -> Case:
         return rotation_error(_final(result, ROTATION), ref)
 
     for k, formulation in enumerate(("quaternion", "rodrigues")):
-        data = _rotation_data(rc, formulation)
-        ours(case, formulation, data, "double", _tol(quick, "double"), t_end, error)
-        ours(case, formulation, data, "quad", _quad(quick, k), t_end, error)
-    data = _rotation_data(rc, "quaternion")
+        data = rotation_data(rc, formulation)
+        ours(case, formulation, data, "double", tolerances(quick, "double"), t_end, error)
+        ours(case, formulation, data, "quad", quad_tolerances(quick, k), t_end, error)
+    data = rotation_data(rc, "quaternion")
     scipy_sweep(
         case, data, t_end, (3, 4), lambda y: rotation_error(y, ref), QUICK_RTOL if quick else RTOL
     )
@@ -509,7 +431,7 @@ def free_body(name: str, key: str, periods: float, quick: bool) -> Case:
 
 
 def heavy_top(quick: bool) -> Case:
-    example = ch.load_scene(ROOT / "examples" / "heavy_top.toml").to_dict()
+    example = heavy_top_example()
     t_end = 5.0 if quick else 50.0
     case = Case(
         "heavy_top",
@@ -521,12 +443,7 @@ def heavy_top(quick: bool) -> Case:
     )
 
     def data(formulation: str) -> dict:
-        d = copy.deepcopy(example)
-        d["initial"] = {"rates": d["initial"]["rates"], "quaternion": [1.0, 0.0, 0.0, 0.0]}
-        d["attitude"] = {"formulation": formulation}
-        d["output"] = {"times": [0.0, 1.0], "monitors": []}
-        d.pop("integrator", None)
-        return d
+        return heavy_top_data(example, formulation)
 
     ref_result = reference_run(data("quaternion"), t_end)
     ref = _final(ref_result, ROTATION)
@@ -535,13 +452,21 @@ def heavy_top(quick: bool) -> Case:
         return rotation_error(_final(result, ROTATION), ref)
 
     for k, formulation in enumerate(("quaternion", "rodrigues")):
-        ours(case, formulation, data(formulation), "double", _tol(quick, "double"), t_end, error)
+        ours(
+            case,
+            formulation,
+            data(formulation),
+            "double",
+            tolerances(quick, "double"),
+            t_end,
+            error,
+        )
         ours(
             case,
             formulation,
             data(formulation),
             "quad",
-            _quad(quick, k, reference=True),
+            quad_tolerances(quick, k, reference=True),
             t_end,
             error,
         )
@@ -558,22 +483,10 @@ def heavy_top(quick: bool) -> Case:
     return case
 
 
-J2_ORBIT = {
-    "mu": 1.0,
-    "elements": (1.0, 0.1, 0.4, 0.3, 1.2, 0.5),  # a, e, i, node, ω, M
-    "J2": 1e-3,
-    "radius": 0.5,
-    "orbits": 100,
-}
-
-
 def orbit_j2(quick: bool) -> Case:
     a, e, i, node, w, M = J2_ORBIT["elements"]
     mu = J2_ORBIT["mu"]
-    # The initial state rounded once to binary64 and handed to every method as such, so all of
-    # them (and the real128 reference) integrate the same numbers.
-    x0, v0 = oe.elements_to_cartesian(oe.Elements(a, e, i, node, w, M), mu)
-    x0, v0 = [float(c) for c in x0], [float(c) for c in v0]
+    x0, v0 = j2_initial_state()
     orbits = 1 if quick else J2_ORBIT["orbits"]
     t_end = float(2 * math.pi * orbits * math.sqrt(a**3 / mu))
     case = Case(
@@ -586,16 +499,7 @@ def orbit_j2(quick: bool) -> Case:
     )
 
     def data(formulation: str) -> dict:
-        return {
-            "orbit": {
-                "mu": mu,
-                "position": x0,
-                "velocity": v0,
-                "formulation": formulation,
-            },
-            "perturbations": {"zonal": {"J2": J2_ORBIT["J2"], "radius": J2_ORBIT["radius"]}},
-            "output": {"times": [0.0, 1.0], "monitors": []},
-        }
+        return j2_data(x0, v0, formulation)
 
     ref_result = reference_run(data("cartesian"), t_end)
     ref = _final(ref_result, ("x", "y", "z"))
@@ -610,8 +514,8 @@ def orbit_j2(quick: bool) -> Case:
 
     for k, formulation in enumerate(("cartesian", "cayley", "quaternion")):
         d = data(formulation)
-        ours(case, formulation, d, "double", _tol(quick, "double"), t_end, error)
-        ours(case, formulation, d, "quad", _quad(quick, k, reference=True), t_end, error)
+        ours(case, formulation, d, "double", tolerances(quick, "double"), t_end, error)
+        ours(case, formulation, d, "quad", quad_tolerances(quick, k, reference=True), t_end, error)
         if k == 1 and not quick:
             reference_check(case, formulation, d, t_end, error, " of a")
     if not quick:
@@ -665,7 +569,7 @@ def _j2_convention(build: Callable, data: dict, t_end: float) -> str:
     against our real128 Cartesian run, and, for scale, IAS15 with J2 switched off (what a
     mismatch of sign or factor in J2 or R would leave)."""
     span = min(t_end, 10 * 2 * math.pi)
-    ref = ch.run(_with(data, "quad", REFERENCE_TOL, [0.0, span]))
+    ref = ch.run(with_integrator(data, "quad", REFERENCE_TOL, [0.0, span]))
     diffs = []
     for j2 in (True, False):
         sim, keep = build()
@@ -704,10 +608,7 @@ def planets(quick: bool) -> Case:
     names = [f"{c}{k + 1}" for k in range(n) for c in "xyz"]
 
     def data(formulation: str) -> dict:
-        d = hamilton_planets.n5_scene(formulation, orbits, 2)
-        d["output"] = {"times": [0.0, 1.0], "monitors": []}
-        d.pop("integrator", None)
-        return d
+        return planets_data(orbits, formulation)
 
     ref_result = reference_run(data("canonical"), t_end)
     ref = _final(ref_result, names)
@@ -724,9 +625,23 @@ def planets(quick: bool) -> Case:
         return pos_error(_final(result, names))
 
     for formulation in ("canonical", "elements"):
-        ours(case, formulation, data(formulation), "double", _tol(quick, "double"), t_end, error)
+        ours(
+            case,
+            formulation,
+            data(formulation),
+            "double",
+            tolerances(quick, "double"),
+            t_end,
+            error,
+        )
     ours(
-        case, "canonical", data("canonical"), "quad", _quad(quick, 0, reference=True), t_end, error
+        case,
+        "canonical",
+        data("canonical"),
+        "quad",
+        quad_tolerances(quick, 0, reference=True),
+        t_end,
+        error,
     )
     if not quick:
         high_accuracy(case, data("canonical"), "canonical", t_end, error)
@@ -743,17 +658,7 @@ def planets(quick: bool) -> Case:
     )
 
     # REBOUND gets barycentric particles from the exact canonical state, rounded once.
-    scene = ch.Scene.from_dict(hamilton_planets.n5_scene("canonical", orbits, 2))
-    with mpmath.workdps(50):
-        state = [mpmath.mpf(s) for s in planets_initial_state(scene.model, "0", 50)]
-        xi = [state[3 * k : 3 * k + 3] for k in range(n)]
-        xprime = [
-            [p / mpmath.mpf(masses[k]) for p in state[3 * n + 3 * k : 3 * n + 3 * k + 3]]
-            for k in range(n)
-        ]
-        X, V = hp.barycentric(xi, xprime, [mpmath.mpf(m) for m in masses], mpmath.mpf(1))
-        X = [[float(c) for c in x] for x in X]
-        V = [[float(c) for c in v] for v in V]
+    X, V = planets_barycentric(orbits)
 
     def build() -> tuple[Any, Any]:
         import rebound
@@ -792,9 +697,9 @@ def free_extended(quick: bool) -> Case:
     def error(result: ch.Result) -> float:
         return rotation_error(_final(result, ROTATION), ref)
 
-    data = _rotation_data(rc, "quaternion")
+    data = rotation_data(rc, "quaternion")
     for precision in ("double", "quad", "real113", "real256"):
-        ours(case, "quaternion", data, precision, _tol(quick, precision), t_end, error)
+        ours(case, "quaternion", data, precision, tolerances(quick, precision), t_end, error)
     if not quick:
         for dps, tols in ((34, (1e-12, 1e-20, None)), (77, (None,))):
             for tol_mp in tols:
