@@ -153,6 +153,7 @@ def ias15_sweep(
         log(f"{case.name}: IAS15 {label}: {sim.steps_done} steps, {best * 1e3:.1f} ms, {err:.2e}")
 
 
+# ---------------------------------------------------------------------------- mpmath
 def mpmath_point(case: Case, rc, t_end: float, dps: int, tol: float | None, ref) -> None:
     """mpmath's odefun (its Taylor method) on the quaternion equations at ``dps`` digits."""
     with mpmath.workdps(dps):
