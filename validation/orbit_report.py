@@ -18,8 +18,10 @@ Four parts (cases in :mod:`orbit_cases`):
 4. an eccentricity sweep (0 … 0.99) in double against a real128 Cartesian reference.
 
 Tolerances are fixed before any number is seen, from the round-off laws (the comment block
-"the laws" below, written out in the report) or taken from the brief (``REQUIREMENTS``). A row
-that misses one is reported as FAIL with the measured number.
+"the laws" in ``orbit_validation/tolerances.py``, written out in the report) or taken from the
+brief (``REQUIREMENTS``). A row that misses one is reported as FAIL with the measured number.
+The tolerances and the runners are the package ``validation/orbit_validation/``; this script
+writes the report and re-exports the names the tests use.
 """
 
 from __future__ import annotations
@@ -55,104 +57,44 @@ from orbit_cases import (  # noqa: E402
     LONG_BY_NAME,
     QUANTITIES,
     REFERENCE,
-    REFERENCE_BY_NAME,
-    SWEEP_ORBITS,
-    eccentricity_base,
-    inclination_base,
     scene,
+)
+from orbit_validation.long_runs import (  # noqa: E402
+    drift_rows,
+    long_comparisons,
+    long_job,
+    position_error,
+)
+from orbit_validation.reference import reference_job  # noqa: E402
+from orbit_validation.runs import columns, integrate, output_times, steps_at  # noqa: E402
+from orbit_validation.sweeps import eccentricity_job, inclination_job  # noqa: E402
+from orbit_validation.tolerances import (  # noqa: E402
+    C_BROUWER,
+    C_LAW,
+    REQUIREMENTS,
+    K_x,
+    law,
+    reference_tolerance,
 )
 from report_sections import write_section  # noqa: E402
 
-import cayley_heyoka as ch  # noqa: E402
-
-# ---------------------------------------------------------------------------- the laws
-# Written down before the first run. ε is the run's machine epsilon, n(t) the steps taken up to
-# t (recorded step by step), N_orb(t) = t/P the orbits, e the eccentricity.
-#
-# * Brouwer: round-off makes a conserved quantity random-walk, |drift(t)| ≤ C_BROUWER ε √n.
-# * Phase law: each step perturbs the energy by ~ε κ relatively, κ = (|T| + |V|)/|E| at
-#   pericentre = (3 + e)/(1 − e) (3 for a circle); as a random walk δE/E ~ ε κ √n(s)/3 (κ/3 = 1
-#   for a circle). The mean motion changes by 3/2 of it, so the phase lags by
-#   ∫ (3/2) (2π/P) ε (κ/3) √n ds = 2π ε (κ/3) N_orb √n (n ∝ s), and the position by the phase
-#   times the largest speed in units of na, √((1 + e)/(1 − e)); a velocity by the phase times
-#   the largest acceleration in units of n²a, 1/(1 − e)². The rounding of ρ itself (an angle
-#   growing ~2π per orbit) adds a phase walk of the same form, ε·2π N_orb √n. Hence
-#       position/a, r, h, angles:   ≤ C_LAW ε (1 + 2π N_orb √n K_x(e)),
-#       velocity/(na), ṙ:            ≤ C_LAW ε (1 + 2π N_orb √n K_v(e)),
-#       K_x = √((1+e)/(1−e)) (3+e)/(3(1−e)),  K_v = (3+e)/(3(1−e)^3).
-#   A comparison of two runs takes the sum of their two tolerances.
-# * Plane angles near Φ = 0: an absolute error δ of the orbit normal moves Θ and Σ by δ/sin Φ
-#   (docs/orbits.md), and the normal random-walks like ε √n, so
-#       |ΔΘ|, |ΔΣ| ≤ C_LAW ε (√n / sin Φ_min + 1 + 2π N_orb √n K_x),
-#   while Φ and Θ − Σ (well defined at Φ = 0) follow the position law.
-C_BROUWER = 10.0
-C_LAW = 10.0
-# From the brief: fixed requirements, independent of the laws.
-REQUIREMENTS = {
-    "quad_reference_relative": 1e-19,  # real128 vs the cases' 20-digit values
-    "long_orbits": 1000,  # orbits of the long runs
-}
-DPS = 60  # digits of the comparisons
-N_TIMES = {"full": 120, "quick": 30}  # log-spaced output times of a long run
-VELOCITY_LIKE = ("rdot", "vx", "vy", "vz")
-
-
-def K_x(e: float) -> float:
-    return math.sqrt((1 + e) / (1 - e)) * (3 + e) / (3 * (1 - e))
-
-
-def K_v(e: float) -> float:
-    return (3 + e) / (3 * (1 - e) ** 3)
-
-
-def law(eps: float, t: Any, n: Any, period: float, k: float) -> Any:
-    """C_LAW ε (1 + 2π N_orb √n K)."""
-    return C_LAW * eps * (1 + 2 * np.pi * np.asarray(t) / period * np.sqrt(np.asarray(n)) * k)
-
-
-def brouwer(eps: float, n: Any) -> Any:
-    return C_BROUWER * eps * np.sqrt(np.maximum(np.asarray(n, dtype=float), 1))
-
-
-# ---------------------------------------------------------------------------- helpers
-def to_mpf(x: Any) -> mpmath.mpf:
-    """A double, real128 or real as an exact mpf (text round-trips the extended types)."""
-    if isinstance(x, float | np.floating | int):
-        return mpmath.mpf(float(x))
-    return mpmath.mpf(str(x))
-
-
-def output_times(period: float, t_end: float, count: int) -> list[float]:
-    """0 and ``count`` log-spaced binary64 times from P/4 to t_end (exact in every type)."""
-    t = np.geomspace(period / 4, t_end, count)
-    return [0.0, *sorted({float(x) for x in t})]
-
-
-def integrate(data: dict) -> tuple[ch.Result, np.ndarray, float]:
-    """Run a scene; the result, the time reached after each step, and the run's seconds
-    without compilation."""
-    steps: list[float] = []
-    t0 = time.perf_counter()
-    result = ch.run(ch.Scene.from_dict(data), progress=lambda t: steps.append(float(t)))
-    seconds = time.perf_counter() - t0 - result.metadata.get("compile_seconds", 0.0)
-    return result, np.asarray(steps), seconds
-
-
-def steps_at(steps: np.ndarray, t: np.ndarray) -> np.ndarray:
-    return np.searchsorted(steps, t, side="right").astype(float)
-
-
-def columns(result: ch.Result, names: tuple[str, ...]) -> dict[str, list[mpmath.mpf]]:
-    """Output columns as exact mpf lists (picklable; comparisons at DPS digits)."""
-    with mpmath.workdps(DPS):
-        return {k: [to_mpf(x) for x in result[k]] for k in names if k in result.variables}
-
-
-def angle_difference(a: mpmath.mpf, b: mpmath.mpf) -> mpmath.mpf:
-    """a − b reduced into (−π, π]."""
-    d = a - b
-    two_pi = 2 * mpmath.pi
-    return d - two_pi * mpmath.floor((d + mpmath.pi) / two_pi)
+__all__ = [
+    "K_x",
+    "columns",
+    "drift_rows",
+    "inclination_job",
+    "integrate",
+    "law",
+    "long_comparisons",
+    "long_job",
+    "main",
+    "output_times",
+    "position_error",
+    "reference_job",
+    "reference_tolerance",
+    "scene",
+    "steps_at",
+]
 
 
 def _e(x: Any) -> str:
@@ -162,399 +104,6 @@ def _e(x: Any) -> str:
 
 def verdict(ok: bool) -> str:
     return "PASS" if ok else "**FAIL**"
-
-
-# ---------------------------------------------------------------------------- departure vector
-_DEPARTURE_CACHE: dict[str, Any] = {}
-
-
-def departure_run(base: dict, times: list[float], precision: str = "quad") -> dict[str, Any]:
-    """Cartesian run carrying the departure-point vector d̂, in ``precision``.
-
-    ẍ = −μx/r³ + ∇Ω and ḋ = −(d̂·ṅ) n̂ = −(d̂·Ḣ)/|H|² H with Ḣ = x × ∇Ω (d̂ ⟂ n̂); d̂(t₀) is the
-    first column of M₀₁M₁₂ at t₀. Θ, Σ, Φ then follow geometrically at every output time (§9.2
-    step 6), and ρ = u + Σ. Ω is built by the package's own disturbing-function module; the
-    system, its initial state and the read-off are this script's.
-    """
-    import heyoka as hy
-
-    from cayley_heyoka.core import vectors
-    from cayley_heyoka.core.model import ParTable
-    from cayley_heyoka.mechanics import frames
-    from cayley_heyoka.mechanics import kepler as el
-    from cayley_heyoka.orbit.disturbing import Context, disturbing_function, gradient
-    from cayley_heyoka.orbit.model import _plane_angles_at, initial_cartesian
-
-    sc = ch.Scene.from_dict(scene(base, "cartesian", precision, times))
-    orbit, prec = sc.model, sc.integrator.precision
-    pars = ParTable()
-    mu = pars.add("mu", orbit.mu)
-    X = list(hy.make_vars("x", "y", "z"))
-    V = list(hy.make_vars("vx", "vy", "vz"))
-    D = list(hy.make_vars("dx", "dy", "dz"))
-    g = gradient(disturbing_function(orbit.perturbations, X, Context(mu, pars)), X)
-    r2 = vectors.dot(X, X)
-    H = vectors.cross(X, V)
-    coef = -vectors.dot(D, vectors.cross(X, g)) / vectors.dot(H, H)
-    rhs = [*V, *[-mu * x * r2**-1.5 + gi for x, gi in zip(X, g, strict=True)]]
-    rhs += [coef * c for c in H]
-    system = list(zip([*X, *V, *D], rhs, strict=True))
-    with mpmath.workdps(DPS):
-        t0 = mpmath.mpf(times[0])
-        x0, v0 = initial_cartesian(orbit, t0)
-        frame0 = _plane_angles_at(orbit.plane, t0)
-        # The gauge Σ(t₀) of the scene (the Cartesian scene itself has none).
-        sigma0 = mpmath.mpf(str(base["orbit"].get("sigma0", "0")))
-        s = el.cartesian_to_cayley(x0, v0, sigma=sigma0, frame=frame0)
-        M02 = vectors.matmul(
-            frames.plane_matrix(*frame0), frames.plane_matrix(s.Theta, s.Sigma, s.Phi)
-        )
-        d0 = [M02[i][0] for i in range(3)]
-        state = [mpmath.nstr(c, DPS) for c in [*x0, *v0, *d0]]
-    key = f"{precision}:{len(pars.values)}:{[str(e) for _, e in system]}"
-    kw = prec.heyoka_kwargs
-    if key not in _DEPARTURE_CACHE:
-        _DEPARTURE_CACHE[key] = hy.taylor_adaptive(
-            system, prec.array(state), pars=prec.array(pars.values), **kw
-        )
-    import copy
-
-    ta = copy.deepcopy(_DEPARTURE_CACHE[key])
-    ta.time = prec.number(times[0])
-    ta.state[:] = prec.array(state)
-    ta.pars[:] = prec.array(pars.values)
-    wall = time.perf_counter()
-    res = ta.propagate_grid(prec.array(times))
-    if int(res[0]) != int(hy.taylor_outcome.time_limit):
-        raise RuntimeError(f"departure reference stopped: {res[0]}")
-    out = res[-1]
-    rows: dict[str, list] = {k: [] for k in QUANTITIES}
-    with mpmath.workdps(DPS):
-        for i, t in enumerate(times):
-            y = [to_mpf(c) for c in out[i]]
-            x, v, d = y[0:3], y[3:6], y[6:9]
-            M01 = frames.plane_matrix(*_plane_angles_at(orbit.plane, mpmath.mpf(t)))
-            M10 = vectors.transpose(M01)
-            Xf, Vf, Df = vectors.matvec(M10, x), vectors.matvec(M10, v), vectors.matvec(M10, d)
-            Hf = vectors.cross(Xf, Vf)
-            h = mpmath.sqrt(vectors.dot(Hf, Hf))
-            n = [c / h for c in Hf]
-            Phi = mpmath.atan2(mpmath.sqrt(n[0] ** 2 + n[1] ** 2), n[2])
-            Theta = mpmath.atan2(n[0], -n[1])
-            N = [mpmath.cos(Theta), mpmath.sin(Theta), mpmath.mpf(0)]
-            Sigma = mpmath.atan2(vectors.dot(N, vectors.cross(n, Df)), vectors.dot(N, Df))
-            u = mpmath.atan2(vectors.dot(Xf, vectors.cross(n, N)), vectors.dot(Xf, N))
-            r = mpmath.sqrt(vectors.dot(x, x))
-            values = {
-                "r": r,
-                "rdot": vectors.dot(x, v) / r,
-                "rho": u + Sigma,
-                "h": h,
-                "Theta": Theta,
-                "Sigma": Sigma,
-                "Phi": Phi,
-                **dict(zip(("x", "y", "z", "vx", "vy", "vz"), [*x, *v], strict=True)),
-            }
-            for k in QUANTITIES:
-                rows[k].append(values[k])
-        # Θ, Σ, ρ continuous along the grid (the caller's grid must sample them finely enough).
-        for k in ("Theta", "Sigma", "rho"):
-            col = rows[k]
-            for i in range(1, len(col)):
-                col[i] = col[i - 1] + angle_difference(col[i], col[i - 1])
-    return {"columns": rows, "steps": int(res[3]), "seconds": time.perf_counter() - wall}
-
-
-# ---------------------------------------------------------------------------- part 1
-def reference_job(name: str, formulation: str, precision: str, case: Any = None) -> dict[str, Any]:
-    """One formulation of R1–R4 at the cases' t; errors of every listed quantity.
-
-    ``case`` replaces the named case (the tests pass a deliberately wrong scene)."""
-    from cayley_heyoka.mechanics import kepler as el
-    from cayley_heyoka.orbit.model import _plane_angles_at
-
-    case = case or REFERENCE_BY_NAME[name]
-    t_end = float(case.t)
-    wall0 = time.perf_counter()
-    if formulation == "departure":
-        # A fine grid so that Θ, Σ, ρ can be followed continuously (ρ̇ ≤ ~2.5 here).
-        times = [float(x) for x in np.linspace(0.0, t_end, int(4 * t_end) + 1)]
-        dep = departure_run(case.scene, times, precision)
-        values = {k: v[-1] for k, v in dep["columns"].items()}
-        steps, seconds, compile_s = dep["steps"], dep["seconds"], math.nan
-    else:
-        data = case.scene_for(formulation, precision, [0.0, t_end])
-        result, _, seconds = integrate(data)
-        steps, compile_s = int(result.counters["steps"]), result.metadata["compile_seconds"]
-        cols = columns(result, QUANTITIES)
-        values = {k: v[-1] for k, v in cols.items()}
-        if formulation == "cartesian":
-            with mpmath.workdps(DPS):
-                frame = _plane_angles_at(ch.Scene.from_dict(data).model.plane, mpmath.mpf(t_end))
-                x = [values[k] for k in ("x", "y", "z")]
-                v = [values[k] for k in ("vx", "vy", "vz")]
-                s = el.cartesian_to_cayley(x, v, sigma=mpmath.mpf(0), frame=frame)
-                values.update(r=s.r, rdot=s.rdot, h=s.h, Theta=s.Theta, Phi=s.Phi)
-    errors = {}
-    with mpmath.workdps(DPS):
-        for k in QUANTITIES:
-            if k not in values:
-                continue
-            ref = mpmath.mpf(case.values[k])
-            d = angle_difference(values[k], ref) if k == "Theta" else values[k] - ref
-            errors[k] = {
-                "relative": float(abs(d) / abs(ref)),
-                "scaled": float(abs(d) / max(abs(ref), 1)),
-            }
-    return {
-        "kind": "reference",
-        "case": name,
-        "formulation": formulation,
-        "precision": precision,
-        "steps": steps,
-        "seconds": seconds,
-        "compile_seconds": compile_s,
-        "wall_seconds": time.perf_counter() - wall0,
-        "errors": errors,
-    }
-
-
-def reference_tolerance(case_name: str, precision: str, quantity: str, steps: int) -> float:
-    """Double: the phase law at t (the steps are spread evenly); real128: the brief's 1e-19."""
-    if precision != "double":
-        return REQUIREMENTS["quad_reference_relative"]
-    case = REFERENCE_BY_NAME[case_name]
-    period = 2 * math.pi * case.a**1.5
-    k = K_v(case.e) if quantity in VELOCITY_LIKE else K_x(case.e)
-    return float(law(EPSILON["double"], float(case.t), steps, period, k))
-
-
-# ---------------------------------------------------------------------------- part 2
-def long_job(name: str, formulation: str, precision: str, mode: str) -> dict[str, Any]:
-    """One long run: positions/velocities on the log grid, steps up to each time, drifts."""
-    case = LONG_BY_NAME[name]
-    wall0 = time.perf_counter()
-    orbits = case.orbits[mode]
-    times = output_times(case.period, orbits * case.period, N_TIMES[mode])
-    result, steps, seconds = integrate(scene(case.base, formulation, precision, times))
-    t = np.array([float(x) for x in result.t])
-    drifts = {}
-    for m in ("energy", "jacobi", "polar_momentum"):
-        if m in result.monitors:
-            drifts[m] = np.array([abs(float(to_mpf(x))) for x in result.drift(m)])
-    phi = [float(to_mpf(x)) for x in result["Phi"]] if "Phi" in result.variables else [math.nan]
-    return {
-        "kind": "long",
-        "case": name,
-        "formulation": formulation,
-        "precision": precision,
-        "orbits": orbits,
-        "t": t,
-        "n": steps_at(steps, t),
-        "steps": int(result.counters["steps"]),
-        "seconds": seconds,
-        "compile_seconds": result.metadata["compile_seconds"],
-        "wall_seconds": time.perf_counter() - wall0,
-        "columns": columns(result, ("x", "y", "z")),
-        "drifts": drifts,
-        "min_sin_phi": float(np.min(np.abs(np.sin(phi)))),
-    }
-
-
-def long_pairs(jobs: dict[tuple, dict]) -> list[tuple[tuple, tuple]]:
-    """(run, reference) pairs: same precision vs Cartesian; against the next precision's
-    Cartesian run."""
-    pairs = []
-    for prec, ref_prec in (("double", "quad"), ("quad", "real160")):
-        for f in ("cayley", "quaternion"):
-            pairs.append(((f, prec), ("cartesian", prec)))
-        for f in FORMULATIONS:
-            pairs.append(((f, prec), ("cartesian", ref_prec)))
-    return [(a, b) for a, b in pairs if a in jobs and b in jobs]
-
-
-def position_error(a: dict, b: dict, scale: float) -> np.ndarray:
-    """|x_a − x_b| / scale at every output time."""
-    out = []
-    with mpmath.workdps(DPS):
-        for i in range(len(a["t"])):
-            d2 = sum((a["columns"][k][i] - b["columns"][k][i]) ** 2 for k in ("x", "y", "z"))
-            out.append(float(mpmath.sqrt(d2) / scale))
-    return np.asarray(out)
-
-
-def long_comparisons(case_name: str, jobs: dict[tuple, dict]) -> list[dict[str, Any]]:
-    case = LONG_BY_NAME[case_name]
-    rows = []
-    for a_key, b_key in long_pairs(jobs):
-        a, b = jobs[a_key], jobs[b_key]
-        err = position_error(a, b, case.a)
-        tol = law(EPSILON[a["precision"]], a["t"], np.maximum(a["n"], 1), case.period, K_x(case.e))
-        tol = tol + law(
-            EPSILON[b["precision"]], b["t"], np.maximum(b["n"], 1), case.period, K_x(case.e)
-        )
-        ratio = err / tol
-        i = int(np.argmax(err))
-        rows.append(
-            {
-                "run": a_key,
-                "against": b_key,
-                "t": a["t"],
-                "err": err,
-                "tol": tol,
-                "max": float(err[i]),
-                "at": float(a["t"][i]),
-                "final": float(err[-1]),
-                "tol_end": float(tol[-1]),
-                "ratio": float(np.max(ratio)),
-                "pass": bool(np.max(ratio) <= 1),
-            }
-        )
-    return rows
-
-
-def drift_rows(case_name: str, jobs: dict[tuple, dict]) -> list[dict[str, Any]]:
-    case = LONG_BY_NAME[case_name]
-    rows = []
-    for (f, prec), j in jobs.items():
-        for m, d in j["drifts"].items():
-            judged = m in case.conserved
-            tol = brouwer(EPSILON[prec], j["n"])
-            rows.append(
-                {
-                    "formulation": f,
-                    "precision": prec,
-                    "monitor": m,
-                    "max": float(np.max(d)),
-                    "final": float(d[-1]),
-                    "tol_end": float(tol[-1]),
-                    "ratio": float(np.max(d / tol)) if judged else math.nan,
-                    "judged": judged,
-                    "pass": (not judged) or bool(np.max(d / tol) <= 1),
-                }
-            )
-    return rows
-
-
-# ---------------------------------------------------------------------------- parts 3 and 4
-def sweep_times(orbits: float, count: int) -> list[float]:
-    period = 2 * math.pi  # a = 1, μ = 1
-    return [float(x) for x in np.linspace(0.0, orbits * period, count)]
-
-
-def inclination_job(inclination: str, mode: str) -> dict[str, Any]:
-    """One inclination: real128 departure-vector reference and the three double formulations."""
-    wall0 = time.perf_counter()
-    base = inclination_base(inclination)
-    orbits = SWEEP_ORBITS[mode]
-    # 16 samples per orbit: fine enough to follow Θ, Σ continuously in the reference.
-    times = sweep_times(orbits, int(16 * orbits) + 1)
-    ref = departure_run(base, times, "quad")
-    rc = ref["columns"]
-    sin_phi_min = float(min(abs(mpmath.sin(p)) for p in rc["Phi"]))
-    out = {
-        "kind": "inclination",
-        "inclination": inclination,
-        "orbits": orbits,
-        "reference_steps": ref["steps"],
-        "reference_seconds": ref["seconds"],
-        "sin_phi_min": sin_phi_min,
-        "runs": {},
-    }
-    t = np.asarray(times)
-    for f in FORMULATIONS:
-        data = scene(base, f, "double", times, limit="0")
-        result, steps, seconds = integrate(data)
-        names = ("x", "y", "z", "Theta", "Sigma", "Phi")
-        cols = columns(result, names)
-        err: dict[str, np.ndarray] = {}
-        with mpmath.workdps(DPS):
-            pos = [
-                mpmath.sqrt(sum((cols[k][i] - rc[k][i]) ** 2 for k in ("x", "y", "z")))
-                for i in range(len(times))
-            ]
-            err["position"] = np.array([float(p) for p in pos])
-            if "Theta" in cols:
-                for k in ("Theta", "Sigma", "Phi"):
-                    err[k] = np.array(
-                        [
-                            float(abs(angle_difference(a, b)))
-                            for a, b in zip(cols[k], rc[k], strict=True)
-                        ]
-                    )
-                err["Theta-Sigma"] = np.array(
-                    [
-                        float(abs(angle_difference(a - b, c - d)))
-                        for a, b, c, d in zip(
-                            cols["Theta"], cols["Sigma"], rc["Theta"], rc["Sigma"], strict=True
-                        )
-                    ]
-                )
-        n = np.maximum(steps_at(steps, t), 1)
-        e = float(INCLINATION_E)
-        base_tol = law(EPSILON["double"], t, n, 2 * math.pi, K_x(e))
-        tol = {
-            "position": base_tol,
-            "Phi": base_tol,
-            "Theta-Sigma": base_tol,
-            "Theta": base_tol + C_LAW * EPSILON["double"] * np.sqrt(n) / sin_phi_min,
-            "Sigma": base_tol + C_LAW * EPSILON["double"] * np.sqrt(n) / sin_phi_min,
-        }
-        out["runs"][f] = {
-            "steps": int(result.counters["steps"]),
-            "seconds": seconds,
-            "max": {k: float(np.max(v)) for k, v in err.items()},
-            "ratio": {k: float(np.max(v / tol[k])) for k, v in err.items()},
-            "tol_end": {k: float(tol[k][-1]) for k in err},
-        }
-    out["wall_seconds"] = time.perf_counter() - wall0
-    return out
-
-
-def eccentricity_job(e: str, mode: str) -> dict[str, Any]:
-    """One eccentricity: real128 Cartesian reference and the three double formulations."""
-    wall0 = time.perf_counter()
-    base = eccentricity_base(e)
-    orbits = SWEEP_ORBITS[mode]
-    times = sweep_times(orbits, int(4 * orbits) + 1)
-    ref, ref_steps, ref_seconds = integrate(scene(base, "cartesian", "quad", times))
-    rc = columns(ref, ("x", "y", "z"))
-    out = {
-        "kind": "eccentricity",
-        "e": e,
-        "orbits": orbits,
-        "reference_steps": int(ref.counters["steps"]),
-        "reference_seconds": ref_seconds,
-        "runs": {},
-    }
-    t = np.asarray(times)
-    for f in FORMULATIONS:
-        result, steps, seconds = integrate(scene(base, f, "double", times))
-        cols = columns(result, ("x", "y", "z"))
-        with mpmath.workdps(DPS):
-            err = np.array(
-                [
-                    float(mpmath.sqrt(sum((cols[k][i] - rc[k][i]) ** 2 for k in ("x", "y", "z"))))
-                    for i in range(len(times))
-                ]
-            )
-        n = np.maximum(steps_at(steps, t), 1)
-        tol = law(EPSILON["double"], t, n, 2 * math.pi, K_x(float(e)))
-        tol = tol + law(
-            EPSILON["quad"], t, np.maximum(steps_at(ref_steps, t), 1), 2 * math.pi, K_x(float(e))
-        )
-        out["runs"][f] = {
-            "steps": int(result.counters["steps"]),
-            "seconds": seconds,
-            "max": float(np.max(err)),
-            "final": float(err[-1]),
-            "ratio": float(np.max(err / tol)),
-            "tol_end": float(tol[-1]),
-            "t": t,
-            "err": err,
-        }
-    out["wall_seconds"] = time.perf_counter() - wall0
-    return out
 
 
 # ---------------------------------------------------------------------------- figures
