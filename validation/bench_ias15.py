@@ -45,17 +45,17 @@ import argparse
 import sys
 from pathlib import Path
 
+from ias15_bench.case import LD, N_FULL, N_QUICK, grid, scene
+from ias15_bench.encke_variants import TimedEncke as _TimedEncke
+from ias15_bench.encke_variants import encke_variant
+from ias15_bench.explanation import explanation
+from ias15_bench.plots import plot
+from ias15_bench.rebound_runs import ias15
+from ias15_bench.reference import reference
+from ias15_bench.report import render
+from ias15_bench.runners import ensemble_run, long_run
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from ias15_bench.case import LD, N_FULL, N_QUICK, grid, scene  # noqa: E402
-from ias15_bench.encke_variants import TimedEncke as _TimedEncke  # noqa: E402
-from ias15_bench.encke_variants import encke_variant  # noqa: E402
-from ias15_bench.explanation import explanation  # noqa: E402
-from ias15_bench.plots import plot  # noqa: E402
-from ias15_bench.rebound_runs import ias15  # noqa: E402
-from ias15_bench.reference import reference  # noqa: E402
-from ias15_bench.report import render  # noqa: E402
-from ias15_bench.runners import ensemble_run, long_run  # noqa: E402
 
 # Taken by validation/users_orbit.py, tests/orbit/test_encke.py and validation/benchmarks.py.
 __all__ = [

@@ -24,9 +24,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from setup_bench.section import run
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from setup_bench.section import run  # noqa: E402
 
 __all__ = ["run"]
 

@@ -8,13 +8,12 @@ section gathers them into one table. Run alone: ``python validation/benchmarks.p
 from __future__ import annotations
 
 import importlib
-import sys
 import time
 from pathlib import Path
 
+from users_common import Row, table
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from users_common import Row, table  # noqa: E402
 
 TOPICS = ("engine", "orbit", "rotation", "reference", "cli")
 

@@ -20,15 +20,13 @@ import sys
 import time
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-if str(HERE) not in sys.path:
-    sys.path.insert(0, str(HERE))
+from work_precision_bench import timing
+from work_precision_bench.orbit_runs import orbit_j2, planets
+from work_precision_bench.report import section
+from work_precision_bench.rotation_runs import free_body, free_extended, heavy_top
+from work_precision_bench.timing import log
 
-from work_precision_bench import timing  # noqa: E402
-from work_precision_bench.orbit_runs import orbit_j2, planets  # noqa: E402
-from work_precision_bench.report import section  # noqa: E402
-from work_precision_bench.rotation_runs import free_body, free_extended, heavy_top  # noqa: E402
-from work_precision_bench.timing import log  # noqa: E402
+HERE = Path(__file__).resolve().parent
 
 __all__ = ["main", "run"]
 

@@ -18,10 +18,10 @@ import sys
 import time
 from pathlib import Path
 
+from bench_common import machine
+from report_sections import write_section
+
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from bench_common import machine  # noqa: E402
-from report_sections import write_section  # noqa: E402
 
 SECTIONS = ("users", "work_precision", "ias15", "conservation", "setup")
 

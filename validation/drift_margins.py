@@ -14,19 +14,16 @@ in quad) instead of the precision's epsilon.
 
 from __future__ import annotations
 
-import sys
 import time
 from fractions import Fraction
 from pathlib import Path
 
 import mpmath
 import numpy as np
+from report_sections import write_section
 
 import cayley_heyoka as ch
 from cayley_heyoka.testing import DRIFT_FACTOR, DRIFT_FLOOR, drift_envelope
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from report_sections import write_section  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

@@ -37,15 +37,14 @@ from pathlib import Path
 import heyoka as hy
 import mpmath
 import numpy as np
+from hamilton_planets import measure
+from report_sections import write_section
 
 import cayley_heyoka as ch
 from cayley_heyoka.hamilton import projectile_solution
 from cayley_heyoka.hamilton.principal import check_principal_function
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from hamilton_planets import measure  # noqa: E402
-from report_sections import write_section  # noqa: E402
 
 DPS = 90
 NAMES = ("eta1", "eta2", "eta3", "varpi1", "varpi2", "varpi3", "S")

@@ -15,15 +15,13 @@ from __future__ import annotations
 import argparse
 import copy
 import statistics
-import sys
 import threading
 import time
 from pathlib import Path
 
-import cayley_heyoka as ch
+from users_common import interleaved
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from users_common import interleaved  # noqa: E402
+import cayley_heyoka as ch
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

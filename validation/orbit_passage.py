@@ -36,12 +36,11 @@ from pathlib import Path
 import heyoka as hy
 import mpmath
 import numpy as np
+from report_sections import write_section
 
 import cayley_heyoka as ch
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from report_sections import write_section  # noqa: E402
 
 EPS = 2.0**-52
 DPS = 40

@@ -34,25 +34,22 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-HERE = Path(__file__).resolve().parent
-for _p in (str(ROOT), str(HERE)):
-    if _p not in sys.path:
-        sys.path.insert(0, _p)
-
-from orbit_cases import scene  # noqa: E402
-from orbit_validation.long_runs import (  # noqa: E402
+from orbit_cases import scene
+from orbit_validation.long_runs import (
     drift_rows,
     long_comparisons,
     long_job,
     position_error,
 )
-from orbit_validation.plan import PARTS, plan  # noqa: E402
-from orbit_validation.reference import reference_job  # noqa: E402
-from orbit_validation.report import write_report  # noqa: E402
-from orbit_validation.runs import columns, integrate, output_times, steps_at  # noqa: E402
-from orbit_validation.sweeps import inclination_job  # noqa: E402
-from orbit_validation.tolerances import K_x, law, reference_tolerance  # noqa: E402
+from orbit_validation.plan import PARTS, plan
+from orbit_validation.reference import reference_job
+from orbit_validation.report import write_report
+from orbit_validation.runs import columns, integrate, output_times, steps_at
+from orbit_validation.sweeps import inclination_job
+from orbit_validation.tolerances import K_x, law, reference_tolerance
+
+ROOT = Path(__file__).resolve().parent.parent
+HERE = Path(__file__).resolve().parent
 
 __all__ = [
     "K_x",

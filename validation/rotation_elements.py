@@ -24,13 +24,13 @@ from __future__ import annotations
 
 import argparse
 import platform
-import sys
 import time
 from pathlib import Path
 
 import heyoka as hy
 import mpmath
 import numpy as np
+from report_sections import write_section
 
 import cayley_heyoka as ch
 from cayley_heyoka.rotation.cayley1846 import Cayley1846
@@ -42,8 +42,6 @@ from cayley_heyoka.rotation.varying_constants import (
 )
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from report_sections import write_section  # noqa: E402
 
 COMMAND = "python validation/rotation_elements.py"
 BODY = {

@@ -32,24 +32,21 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-HERE = Path(__file__).resolve().parent
-for _p in (str(ROOT), str(HERE)):
-    if _p not in sys.path:
-        sys.path.insert(0, _p)
-
-from rotation_cases import BY_NAME, separatrix_distance  # noqa: E402
-from rotation_validation.exact_flow import law_constants  # noqa: E402
-from rotation_validation.plan import run_tasks  # noqa: E402
-from rotation_validation.report import write_report  # noqa: E402
-from rotation_validation.runs import (  # noqa: E402
+from rotation_cases import BY_NAME, separatrix_distance
+from rotation_validation.exact_flow import law_constants
+from rotation_validation.plan import run_tasks
+from rotation_validation.report import write_report
+from rotation_validation.runs import (
     crossing_errors,
     integrate,
     output_times,
     run_job,
     state_errors,
 )
-from rotation_validation.verdicts import quantity_rows  # noqa: E402
+from rotation_validation.verdicts import quantity_rows
+
+ROOT = Path(__file__).resolve().parent.parent
+HERE = Path(__file__).resolve().parent
 
 __all__ = [
     "crossing_errors",

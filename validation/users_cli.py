@@ -20,10 +20,10 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+from users_common import Row, interleaved, table
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-sys.path.insert(0, str(HERE))
-from users_common import Row, interleaved, table  # noqa: E402
 
 #: The command line should start in at most this fraction of heyoka's import.
 TARGET = 0.5

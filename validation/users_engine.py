@@ -20,20 +20,18 @@ from __future__ import annotations
 
 import argparse
 import copy
-import sys
 from pathlib import Path
 
 import heyoka as hy
 import numpy as np
+from users_common import Row, interleaved, table
+
+import cayley_heyoka as ch
+from cayley_heyoka.core import engine
+from cayley_heyoka.workflows.study import Study, load_study
+from cayley_heyoka.workflows.sweep import run_sweep
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
-from users_common import Row, interleaved, table  # noqa: E402
-
-import cayley_heyoka as ch  # noqa: E402
-from cayley_heyoka.core import engine  # noqa: E402
-from cayley_heyoka.workflows.study import Study, load_study  # noqa: E402
-from cayley_heyoka.workflows.sweep import run_sweep  # noqa: E402
 
 EXAMPLES = HERE.parent / "examples"
 

@@ -30,21 +30,18 @@ import copy
 import statistics
 import sys
 import time
-from pathlib import Path
 from typing import Any
 
+import bench_ias15
+import engine_figures
 import heyoka as hy
 import numpy as np
+from bench_common import available
+from users_common import Row, interleaved, table
 
 import cayley_heyoka as ch
 from cayley_heyoka.core.compiler import compile_model
 from cayley_heyoka.core.families import FAMILIES
-
-sys.path.insert(0, str(Path(__file__).parent))
-import bench_ias15  # noqa: E402
-import engine_figures  # noqa: E402
-from bench_common import available  # noqa: E402
-from users_common import Row, interleaved, table  # noqa: E402
 
 PERIOD = 4.97  # of case R1's orbit, roughly: spans are given in orbits
 

@@ -35,14 +35,12 @@ import time
 from pathlib import Path
 
 import mpmath
+from users_common import Row, interleaved, table
+
+from cayley_heyoka.reference import FreeRigidBody
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(ROOT))
-from users_common import Row, interleaved, table  # noqa: E402
-
-from cayley_heyoka.reference import FreeRigidBody  # noqa: E402
 
 EXAMPLES = ROOT / "examples"
 #: The issue's target for the torque-free body's reference, on this 2-core machine.

@@ -38,18 +38,15 @@ import sys
 import threading
 import time
 from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 import heyoka as hy
 import mpmath
 import numpy as np
+from users_common import Row, interleaved, table
 
 import cayley_heyoka as ch
 from cayley_heyoka.reference import FreeRigidBody
-
-sys.path.insert(0, str(Path(__file__).parent))
-from users_common import Row, interleaved, table  # noqa: E402
 
 INERTIA, RATES, RODRIGUES = [1.0, 1.6, 2.3], [0.3, 1.0, 0.5], [0.1, 0.2, -0.3]
 CHART_ANGLE = 160  # degrees: the default max_chart_angle

@@ -10,18 +10,14 @@ round-off law of the less accurate one (the Cartesian, whose allowance is the ph
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import mpmath
 import numpy as np
+import orbit_cases
 import pytest
 
 from cayley_heyoka import IntegrationError, Scene, SceneError, run
 from cayley_heyoka.mechanics.kepler import Elements, elements_to_cartesian
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
-import orbit_cases  # noqa: E402
 
 EPS = 2.0**-52
 EPS_QUAD = 2.0**-112

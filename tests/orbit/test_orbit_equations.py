@@ -9,11 +9,10 @@
 from __future__ import annotations
 
 import copy
-import sys
-from pathlib import Path
 
 import heyoka as hy
 import numpy as np
+import orbit_cases
 import pytest
 
 from cayley_heyoka import Scene
@@ -23,9 +22,6 @@ from cayley_heyoka.core.model import ParTable
 from cayley_heyoka.mechanics import frames
 from cayley_heyoka.orbit.disturbing import Context, disturbing_function
 from cayley_heyoka.orbit.model import CAYLEY
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
-import orbit_cases  # noqa: E402
 
 
 def _r3_extended() -> dict:

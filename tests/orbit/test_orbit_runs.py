@@ -24,18 +24,14 @@ from __future__ import annotations
 import copy
 import math
 import re
-import sys
-from pathlib import Path
 
 import mpmath
 import numpy as np
+import orbit_cases
 import pytest
 
 from cayley_heyoka import IntegrationError, Scene, load_result, run
 from cayley_heyoka.core.families import FAMILIES
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "validation"))
-import orbit_cases  # noqa: E402
 
 EPS = 2.0**-52
 FORMULATIONS = ("cayley", "quaternion", "cartesian")

@@ -9,14 +9,12 @@ installed (scipy, REBOUND) are reported by the harness as such.
 from __future__ import annotations
 
 import re
-import sys
 from pathlib import Path
 
-VALIDATION = Path(__file__).resolve().parents[2] / "validation"
-sys.path.insert(0, str(VALIDATION))
+import benchmarks
+from report_sections import markers
 
-import benchmarks  # noqa: E402
-from report_sections import markers  # noqa: E402
+VALIDATION = Path(__file__).resolve().parents[2] / "validation"
 
 
 def test_quick_run_writes_every_section(tmp_path):

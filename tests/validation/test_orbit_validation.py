@@ -10,18 +10,15 @@ double within the law, the inclination sweep down to 1e-8 rad.
 from __future__ import annotations
 
 import copy
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import orbit_report as orr
 import pytest
+from orbit_cases import EPSILON, LONG_BY_NAME, REFERENCE
 
 VALIDATION = Path(__file__).resolve().parents[2] / "validation"
-sys.path.insert(0, str(VALIDATION))
-
-import orbit_report as orr  # noqa: E402
-from orbit_cases import EPSILON, LONG_BY_NAME, REFERENCE  # noqa: E402
 
 
 def reference_failures(job: dict) -> list[str]:

@@ -10,17 +10,14 @@ Rodrigues re-basing case.
 from __future__ import annotations
 
 import dataclasses
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+import rotation_report as rr
+from rotation_cases import BY_NAME, EPSILON
 
 VALIDATION = Path(__file__).resolve().parents[2] / "validation"
-sys.path.insert(0, str(VALIDATION))
-
-import rotation_report as rr  # noqa: E402
-from rotation_cases import BY_NAME, EPSILON  # noqa: E402
 
 
 def failing_rows(job: dict) -> list[dict]:
