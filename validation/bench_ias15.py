@@ -46,8 +46,7 @@ import sys
 from pathlib import Path
 
 from ias15_bench.case import LD, N_FULL, N_QUICK, grid, scene
-from ias15_bench.encke_variants import TimedEncke as _TimedEncke
-from ias15_bench.encke_variants import encke_variant
+from ias15_bench.encke_variants import TimedEncke, encke_variant
 from ias15_bench.explanation import explanation
 from ias15_bench.plots import plot
 from ias15_bench.rebound_runs import ias15
@@ -62,7 +61,7 @@ __all__ = [
     "LD",
     "N_FULL",
     "N_QUICK",
-    "_TimedEncke",
+    "TimedEncke",
     "encke_variant",
     "grid",
     "ias15",

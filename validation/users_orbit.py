@@ -187,14 +187,14 @@ def against_ias15(quick: bool) -> list[Row]:
         extra = ""
         if formulation == "encke":
             # One more run with the rectification handler timed: its share of the wall time.
-            with bench_ias15.encke_variant(bench_ias15._TimedEncke):
+            with bench_ias15.encke_variant(bench_ias15.TimedEncke):
                 timed = bench_ias15.scene(formulation, times, **integrator)
                 ch.run(timed)  # warm: the timed handler's model, compiled or cached
-                bench_ias15._TimedEncke.seconds = 0.0
+                bench_ias15.TimedEncke.seconds = 0.0
                 t0 = time.perf_counter()
                 r = ch.run(timed)
                 wall = time.perf_counter() - t0
-            handler = bench_ias15._TimedEncke.seconds
+            handler = bench_ias15.TimedEncke.seconds
             each = handler / max(r.counters["rectifications"], 1)
             extra = (
                 f"; rectification handler {handler / wall:.0%} of the wall time "

@@ -243,7 +243,7 @@ class Encke:
             E = self.anomaly(ta, pars)
             if isinstance(E, np.longdouble):  # a compiled run's rare case (e = 0, unbound)
                 E = ar.scalar(float(E)) + ar.scalar(float(E - _LD(float(E))))
-            y, ydot = _ellipse(ar, old, E)
+            y, ydot = ellipse_state(ar, old, E)
             X = [y[i] + ar.scalar(st[i]) for i in range(3)]
             V = [ydot[i] + ar.scalar(st[3 + i]) for i in range(3)]
             try:
@@ -426,7 +426,7 @@ def _derived(p: dict[str, Any], k2: Any) -> dict[str, Any]:
 
 def _deviation(ar: Any, p: dict[str, Any], X: Sequence[Any], V: Sequence[Any], E: Any) -> list:
     """δ = (X − y, V − ẏ) from the ellipse of the parameters ``p`` at the anomaly E."""
-    y, ydot = _ellipse(ar, p, E)
+    y, ydot = ellipse_state(ar, p, E)
     return [X[i] - y[i] for i in range(3)] + [V[i] - ydot[i] for i in range(3)]
 
 
@@ -454,7 +454,7 @@ def _rectifiers() -> tuple[Any, Any]:
     later builds), the rounding of the new parameters to double between them:
 
     * ``(E, δ, e, 1 − e, n, A, B, μ) → (X, V, e, 1/a, |h|, A, B, E₀, n, their sum)``: the
-      state on the old ellipse and its osculating elements (:func:`_ellipse`,
+      state on the old ellipse and its osculating elements (:func:`ellipse_state`,
       :func:`_osculating`);
     * ``(X, V, ψ, e, 1 − e, n, A, B, k²) → (α, β, γ, n², κ, δ)`` on the rounded ellipse
       (:func:`_derived`, :func:`_deviation`).
@@ -464,7 +464,7 @@ def _rectifiers() -> tuple[Any, Any]:
     d = list(hy.make_vars(*(f"d{i}" for i in range(6))))
     X = list(hy.make_vars(*(f"X{i}" for i in range(6))))
     curve = dict(zip(_CURVE, hy.make_vars(*(f"c{i}" for i in range(len(_CURVE)))), strict=True))
-    y, ydot = _ellipse(ar, curve, E)
+    y, ydot = ellipse_state(ar, curve, E)
     state = [y[i] + d[i] for i in range(3)] + [ydot[i] + d[3 + i] for i in range(3)]
     o = _osculating(ar, mu, state[:3], state[3:])
     first = state + [o["e"], o["inv_a"], o["h"], *o["A"], *o["B"], o["E0"], o["n"]]
@@ -523,7 +523,7 @@ def _rectify_compiled(enc: Encke, ta: Any, pars: Any) -> bool:
     return True
 
 
-def _ellipse(ar: Any, p: dict[str, Any], E: Any) -> tuple[list, list]:
+def ellipse_state(ar: Any, p: dict[str, Any], E: Any) -> tuple[list, list]:
     """y and ẏ at the anomaly E, of the parameters ``p`` (exact values), in extended
     precision, by the formulas of :meth:`Encke.curve`."""
     s, c = ar.sin(E / 2), ar.cos(E / 2)

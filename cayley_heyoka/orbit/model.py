@@ -146,7 +146,7 @@ def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
         return [scene_mpf(c) for c in x], [scene_mpf(c) for c in v]
     values = {k: scene_mpf(v) for k, v in orbit.initial[1].items()}
     return el.elements_to_cartesian(
-        el.Elements(**values), scene_mpf(orbit.mu), frame=_plane_angles_at(orbit.plane, t)
+        el.Elements(**values), scene_mpf(orbit.mu), frame=plane_angles_at(orbit.plane, t)
     )
 
 
@@ -161,7 +161,7 @@ def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
         if orbit.formulation == "cartesian":
             values = [*x, *v]
         else:
-            frame = _plane_angles_at(orbit.plane, t)
+            frame = plane_angles_at(orbit.plane, t)
             s = el.cartesian_to_cayley(x, v, sigma=scene_mpf(orbit.sigma0), frame=frame)
             values = [s.r, s.rdot, s.rho, s.h]
             if orbit.formulation == "cayley":
@@ -400,7 +400,7 @@ def _plane_expressions(motion: PlaneMotion | None, pars: ParTable) -> eq.Referen
     return eq.ReferencePlane(theta, sigma, phi, th1, sg1, ph1, motion.departure_point)
 
 
-def _plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
+def plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
     """(θ′, σ′, φ′) at time t in mpmath (zeros for the fixed frame)."""
     if motion is None:
         return (mpmath.mpf(0),) * 3
@@ -408,7 +408,7 @@ def _plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
 
 
 def _plane_matrix_at(motion: PlaneMotion | None, t: Any) -> frames.Matrix:
-    return frames.plane_matrix(*_plane_angles_at(motion, t))
+    return frames.plane_matrix(*plane_angles_at(motion, t))
 
 
 def _plane_quaternion(frame: tuple, angles: tuple) -> list:

@@ -330,7 +330,7 @@ def test_compiled_rectification_agrees_with_mpmath(e):
     def position(pars, state):
         with ar.context():
             curve = {name: ar.scalar(pars[handler.index[name]]) for name in encke._CURVE}
-            y, ydot = encke._ellipse(ar, curve, 2 * ar.scalar(state[6]))
+            y, ydot = encke.ellipse_state(ar, curve, 2 * ar.scalar(state[6]))
             return [y[i] + ar.scalar(state[i]) for i in range(3)] + [
                 ydot[i] + ar.scalar(state[3 + i]) for i in range(3)
             ]

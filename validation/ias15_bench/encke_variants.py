@@ -96,8 +96,8 @@ class KeplerClockEncke(encke_module.Encke):
         e, E0 = p["e"], 2 * st[6]
         M0 = float(E0 - e * np.sin(E0))
         ar = types.SimpleNamespace(sin=np.sin, cos=np.cos)  # long double, by numpy
-        y0, v0 = encke_module._ellipse(ar, p, E0)
-        y1, v1 = encke_module._ellipse(ar, p, _kepler_ld(e, LD(M0)))
+        y0, v0 = encke_module.ellipse_state(ar, p, E0)
+        y1, v1 = encke_module.ellipse_state(ar, p, _kepler_ld(e, LD(M0)))
         for i in range(3):
             st[i] += y0[i] - y1[i]
             st[3 + i] += v0[i] - v1[i]

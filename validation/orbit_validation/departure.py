@@ -31,7 +31,7 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
     from cayley_heyoka.mechanics import frames
     from cayley_heyoka.mechanics import kepler as el
     from cayley_heyoka.orbit.disturbing import Context, disturbing_function, gradient
-    from cayley_heyoka.orbit.model import _plane_angles_at, initial_cartesian
+    from cayley_heyoka.orbit.model import initial_cartesian, plane_angles_at
 
     sc = ch.Scene.from_dict(scene(base, "cartesian", precision, times))
     orbit, prec = sc.model, sc.integrator.precision
@@ -50,7 +50,7 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
     with mpmath.workdps(DPS):
         t0 = mpmath.mpf(times[0])
         x0, v0 = initial_cartesian(orbit, t0)
-        frame0 = _plane_angles_at(orbit.plane, t0)
+        frame0 = plane_angles_at(orbit.plane, t0)
         # The gauge Σ(t₀) of the scene (the Cartesian scene itself has none).
         sigma0 = mpmath.mpf(str(base["orbit"].get("sigma0", "0")))
         s = el.cartesian_to_cayley(x0, v0, sigma=sigma0, frame=frame0)
@@ -81,7 +81,7 @@ def departure_run(base: dict, times: list[float], precision: str = "quad") -> di
         for i, t in enumerate(times):
             y = [to_mpf(c) for c in out[i]]
             x, v, d = y[0:3], y[3:6], y[6:9]
-            M01 = frames.plane_matrix(*_plane_angles_at(orbit.plane, mpmath.mpf(t)))
+            M01 = frames.plane_matrix(*plane_angles_at(orbit.plane, mpmath.mpf(t)))
             M10 = vectors.transpose(M01)
             Xf, Vf, Df = vectors.matvec(M10, x), vectors.matvec(M10, v), vectors.matvec(M10, d)
             Hf = vectors.cross(Xf, Vf)

@@ -22,7 +22,7 @@ def reference_job(name: str, formulation: str, precision: str, case: Any = None)
 
     ``case`` replaces the named case (the tests pass a deliberately wrong scene)."""
     from cayley_heyoka.mechanics import kepler as el
-    from cayley_heyoka.orbit.model import _plane_angles_at
+    from cayley_heyoka.orbit.model import plane_angles_at
 
     case = case or REFERENCE_BY_NAME[name]
     t_end = float(case.t)
@@ -41,7 +41,7 @@ def reference_job(name: str, formulation: str, precision: str, case: Any = None)
         values = {k: v[-1] for k, v in cols.items()}
         if formulation == "cartesian":
             with mpmath.workdps(DPS):
-                frame = _plane_angles_at(ch.Scene.from_dict(data).model.plane, mpmath.mpf(t_end))
+                frame = plane_angles_at(ch.Scene.from_dict(data).model.plane, mpmath.mpf(t_end))
                 x = [values[k] for k in ("x", "y", "z")]
                 v = [values[k] for k in ("vx", "vy", "vz")]
                 s = el.cartesian_to_cayley(x, v, sigma=mpmath.mpf(0), frame=frame)
