@@ -42,8 +42,9 @@ class Family:
         The family's tables (a mapping) → its parsed, validated model description.
     build
         A scene → its :class:`~.model.Model`.
-    check
-        Validation that needs the whole scene (the start time, the outputs), or None.
+    validate
+        Validation that needs the whole scene (the start time, the outputs), or None; raises
+        :class:`~.errors.SceneError`. (Not a consistency check: that is ``consistency_check``.)
     output_keys
         Output-table keys the family adds to the generic ones.
     consistency_check
@@ -59,7 +60,7 @@ class Family:
     tables: tuple[str, ...]
     parse: Callable[[Mapping[str, Any]], Any]
     build: Callable[[Any], Any]
-    check: Callable[[Any], None] | None = None
+    validate: Callable[[Any], None] | None = None
     output_keys: tuple[str, ...] = ()
     consistency_check: Callable[[Any, Any], Any] | None = None
     closed_form: Callable[[Any], Any] | None = None

@@ -359,8 +359,8 @@ class Scene:
         events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
         model = spec.parse({k: data[k] for k in spec.tables if k in data})
         scene = cls(family, model, integrator, output, events, title, plain_copy(data))
-        if spec.check is not None:
-            spec.check(scene)
+        if spec.validate is not None:
+            spec.validate(scene)
         return scene
 
     @classmethod

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..core.families import Family, later
-from .model import build_model, check
+from .model import build_model, validate
 from .scene import Orbit
 
 FAMILY = Family(
@@ -12,6 +12,6 @@ FAMILY = Family(
     ("orbit", "perturbations", "reference_plane"),
     Orbit.parse,
     build_model,
-    check,
+    validate,
     consistency_check=later("cayley_heyoka.orbit.cartesian_check", "check_orbit"),
 )

@@ -84,7 +84,7 @@ def build_model(scene: Scene) -> Model:
     )
 
 
-def check(scene: Scene) -> None:
+def validate(scene: Scene) -> None:
     """Geometric constraints that need the start time: raise :class:`SceneError` if violated."""
     orbit: Orbit = scene.model
     with mpmath.workdps(30):
