@@ -68,3 +68,20 @@ def test_a_family_may_not_take_one_of_our_names(monkeypatch):
     _fresh(monkeypatch, metadata.EntryPoint("orbit", "plugin_family:FAMILY", families.ENTRY_POINTS))
     with pytest.raises(ch.SceneError, match="one of cayley_heyoka's own"):
         ch.Scene.from_dict(OSCILLATOR)
+
+
+def test_a_family_that_fails_to_load_is_named_and_stops_nothing_else(monkeypatch):
+    _fresh(
+        monkeypatch,
+        metadata.EntryPoint("broken", "no_such_module_here:FAMILY", families.ENTRY_POINTS),
+    )
+    scene = ch.Scene.from_dict(
+        {
+            "body": {"inertia": ["1", "2", "3"]},
+            "initial": {"rates": ["1", "0", "0"]},
+            "output": {"times": [0, 1]},
+        }
+    )
+    assert scene.family == "rotation"
+    with pytest.raises(ch.SceneError, match="'broken' .* cannot be loaded: ModuleNotFoundError"):
+        ch.Scene.from_dict(OSCILLATOR)

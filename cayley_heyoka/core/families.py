@@ -105,7 +105,13 @@ class _Registry(Mapping[str, Family]):
         if family is None:
             path = self._known()[name]
             module, _, attr = path.partition(":")
-            family = getattr(import_module(module), attr or "FAMILY")
+            try:
+                family = getattr(import_module(module), attr or "FAMILY")
+            except Exception as exc:  # another package's family failing to load: say which
+                raise SceneError(
+                    "families",
+                    f"the family {name!r} ({path}) cannot be loaded: {type(exc).__name__}: {exc}",
+                ) from exc
             if not isinstance(family, Family) or family.name != name:
                 raise SceneError("families", f"{path!r} is not the Family {name!r}")
             self._loaded[name] = family
@@ -122,12 +128,24 @@ FAMILIES: Mapping[str, Family] = _Registry()
 
 
 def family_of(data: Mapping[str, Any]) -> str:
-    """The family whose identifying table the scene has."""
-    families = [FAMILIES[name] for name in FAMILIES]
+    """The family whose identifying table the scene has.
+
+    A family of another package that fails to load does not stop scenes of the others; it is
+    named in the error when no loaded family claims the scene.
+    """
+    families, broken = [], []
+    for name in FAMILIES:
+        try:
+            families.append(FAMILIES[name])
+        except SceneError as exc:
+            broken.append(exc.constraint)
     found = [f.name for f in families if f.key_table in data]
     if len(found) == 1:
         return found[0]
     expected = ", ".join(f"[{f.key_table}] ({f.name})" for f in families)
     if not found:
-        raise SceneError("scene", f"names no model family; expected one of the tables {expected}")
+        also = "".join(f"; {b}" for b in broken)
+        raise SceneError(
+            "scene", f"names no model family; expected one of the tables {expected}{also}"
+        )
     raise SceneError("scene", f"names several model families {found}; use one of {expected}")
