@@ -167,3 +167,35 @@ def test_no_module_takes_another_modules_private_names():
                 if private:
                     taken.append(f"{path.relative_to(PACKAGE.parent)}: {private}")
     assert taken == []
+
+
+def test_every_import_in_validation_resolves():
+    """The same for the validation scripts and their packages (tests run few of their paths)."""
+    import ast
+
+    validation = PACKAGE.parent / "validation"
+    ours = {p.stem for p in validation.glob("*.py")} | {
+        p.parent.name for p in validation.glob("*/__init__.py")
+    }
+    broken = []
+    for path in sorted(validation.rglob("*.py")):
+        parts = path.relative_to(validation).with_suffix("").parts
+        package = parts[:-1]
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = list(package)[: len(package) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            elif node.module and node.module.split(".")[0] in ours | {"cayley_heyoka"}:
+                target = node.module
+            else:
+                continue
+            module = importlib.import_module(target)
+            for alias in node.names:
+                if not hasattr(module, alias.name):
+                    try:
+                        importlib.import_module(f"{target}.{alias.name}")
+                    except ImportError:
+                        broken.append(f"{path.relative_to(validation)}: {target}.{alias.name}")
+    assert broken == []

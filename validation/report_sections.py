@@ -34,3 +34,23 @@ def write_section(path: Path, name: str, body: str) -> Path:
     old = path.read_text() if path.exists() else ""
     path.write_text(replace_section(old, name, body))
     return path
+
+
+def machine_lines(total_seconds: float, workers: int, mode: str) -> list[str]:
+    """The report's machine and run lines: platform, cores, worker processes, versions; mode,
+    total wall time and when it was generated."""
+    import os
+    import platform
+    import time
+
+    import heyoka
+    import mpmath
+    import numpy as np
+
+    return [
+        f"* Machine: {platform.platform()}, {os.cpu_count()} cores, {workers} worker processes; "
+        f"Python {platform.python_version()}, heyoka {heyoka.__version__}, "
+        f"numpy {np.__version__}, mpmath {mpmath.__version__}.",
+        f"* Mode: {mode}; total wall time {total_seconds / 60:.1f} min; generated "
+        f"{time.strftime('%Y-%m-%d %H:%M %Z')}.",
+    ]

@@ -2,15 +2,10 @@
 
 from __future__ import annotations
 
-import os
-import platform
-import time
 from pathlib import Path
 
-import mpmath
-import numpy as np
 from orbit_cases import FORMULATIONS, INCLINATION_E, LONG
-from report_sections import write_section
+from report_sections import machine_lines, write_section
 
 from .figures import plot_eccentricity, plot_inclination, plot_long
 from .tables import (
@@ -22,18 +17,6 @@ from .tables import (
     sci,
 )
 from .tolerances import C_BROUWER, C_LAW, REQUIREMENTS
-
-
-def machine_lines(total_seconds: float, workers: int, mode: str) -> list[str]:
-    import heyoka
-
-    return [
-        f"* Machine: {platform.platform()}, {os.cpu_count()} cores, {workers} worker processes; "
-        f"Python {platform.python_version()}, heyoka {heyoka.__version__}, "
-        f"numpy {np.__version__}, mpmath {mpmath.__version__}.",
-        f"* Mode: {mode}; total wall time {total_seconds / 60:.1f} min; generated "
-        f"{time.strftime('%Y-%m-%d %H:%M %Z')}.",
-    ]
 
 
 def laws_text() -> list[str]:

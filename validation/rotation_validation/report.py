@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from report_sections import write_section
+from report_sections import machine_lines, write_section
 from rotation_cases import BY_NAME, CASES, REFERENCE_DPS
 
 from .closed_forms import closed_form_section
@@ -17,7 +17,6 @@ from .tables import (
     ensemble_table,
     exponent_table,
     laws_text,
-    machine_lines,
     requirement_rows,
     summary_rows,
 )

@@ -3,29 +3,13 @@
 from __future__ import annotations
 
 import math
-import os
-import platform
-import time
 from typing import Any
 
-import mpmath
 import numpy as np
 from rotation_cases import BY_NAME
 
 from .laws import C_BROUWER, C_LAW, ENSEMBLE_LAW, FIT_SLACK, REQUIREMENTS
 from .verdicts import fit_rows, quantity_rows, sci, verdict
-
-
-def machine_lines(total_seconds: float, jobs: int, mode: str) -> list[str]:
-    import heyoka
-
-    return [
-        f"* Machine: {platform.platform()}, {os.cpu_count()} cores, {jobs} worker processes; "
-        f"Python {platform.python_version()}, heyoka {heyoka.__version__}, "
-        f"numpy {np.__version__}, mpmath {mpmath.__version__}.",
-        f"* Mode: {mode}; total wall time {total_seconds / 60:.1f} min; generated "
-        f"{time.strftime('%Y-%m-%d %H:%M %Z')}.",
-    ]
 
 
 def requirement_rows(jobs: list[dict[str, Any]]) -> list[str]:
