@@ -16,7 +16,6 @@ from pathlib import Path
 
 import pytest
 
-from cayley_heyoka.cli import plot as plot_verb
 from cayley_heyoka.cli import reference as reference_verb
 from cayley_heyoka.cli import sweep as sweep_verb
 from cayley_heyoka.workflows import plots, study
@@ -100,10 +99,14 @@ def test_run_loads_no_other_commands_workflow(tmp_path):
     assert (code, loaded) == (0, ["heyoka"])
 
 
+def test_plot_kinds_come_from_the_families():
+    """``plot --kind`` has no fixed choices: the drift, and each registered family's kinds."""
+    assert plots.kinds() == ("drift", "polhode", "crossings", "orbit")
+
+
 def test_the_parsers_choices_are_the_workflows():
     """The verb modules write their choices and defaults out (importing the workflow would
     load numpy); they must stay those of the workflow."""
-    assert plot_verb.KINDS == plots.KINDS
     assert sweep_verb.BACKENDS == study.BACKENDS
     assert reference_verb.METHODS == reference_run.METHODS
     assert reference_verb.MAX_BITS == reference_run.MAX_BITS

@@ -185,7 +185,9 @@ def test_forced_polhode_is_the_curve_only(top):
 
 
 def test_polhode_refuses_an_orbit_and_flat_axes(kepler_j2, free):
-    with pytest.raises(PlotError, match=r"'polhode' needs a rigid-body.*supports: drift, orbit$"):
+    with pytest.raises(
+        PlotError, match=r"'polhode' is drawn for rotation results.*supports: drift, orbit$"
+    ):
         polhode(kepler_j2)
     with pytest.raises(PlotError, match="3-D axes"):
         polhode(free, ax=Figure().add_subplot())
@@ -263,7 +265,7 @@ def test_plot_file_writes_each_kind_a_result_supports(free, tmp_path, capsys):
     assert capsys.readouterr().out.strip() == f"plot written to {out}" and out.is_file()
     assert main(["plot", str(path), "--kind", "orbit"]) == 2
     err = capsys.readouterr().err
-    assert "needs the position x, y, z" in err and "supports: drift, polhode, crossings" in err
+    assert "is drawn for orbit results" in err and "supports: drift, polhode, crossings" in err
 
 
 def test_command_refuses_missing_and_foreign_files(tmp_path, capsys):

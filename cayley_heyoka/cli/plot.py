@@ -8,21 +8,25 @@ import sys
 from pathlib import Path
 from typing import Any
 
-# The kinds of plot, written here so that building the parser imports nothing of the plots;
-# tests/test_cli_imports.py holds them equal to plots.KINDS.
-KINDS: tuple[str, ...] = ("drift", "polhode", "orbit", "crossings")
-
 
 def add_parser(subparsers: Any) -> None:
     """Add ``plot`` to the ``cayley-heyoka`` command."""
     parser = subparsers.add_parser(
         "plot",
         help="draw a result or sweep file as a PNG",
-        description="Draw a result or sweep file: drift against time (log-log), the polhode, "
-        "the orbit, or the invariable-plane crossings.",
+        description="Draw a result or sweep file: drift against time (log-log), or a plot "
+        "the result's model family draws (a rigid body's polhode and invariable-plane "
+        "crossings, an orbit's path).",
     )
     parser.add_argument("file", type=Path, help="result or sweep HDF5 file")
-    parser.add_argument("--kind", required=True, choices=KINDS, help="what to draw")
+    # No fixed choices: a family of another package may add kinds; the plot says what the
+    # result supports when a kind is not one of them.
+    parser.add_argument(
+        "--kind",
+        required=True,
+        help="what to draw: drift, or one of the result's family's plots "
+        "(ours: polhode, crossings, orbit)",
+    )
     parser.add_argument(
         "--out", type=Path, help="figure file to write (default: FILE's stem + _KIND.png)"
     )

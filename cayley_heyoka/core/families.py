@@ -53,6 +53,10 @@ class Family:
     closed_form
         ``scene -> ClosedForm | None`` (:mod:`.closed_form`): the motion in closed form where
         the scene has one (``cayley-heyoka reference``), or None for a family without any.
+    plot_kinds
+        The kinds of plot the family draws beside the drift (``cayley-heyoka plot --kind``).
+    plots
+        ``() -> {kind: Plot}`` (:mod:`.figures`), loaded when a plot is drawn; None without.
     """
 
     name: str
@@ -64,6 +68,8 @@ class Family:
     output_keys: tuple[str, ...] = ()
     consistency_check: Callable[[Any, Any], Any] | None = None
     closed_form: Callable[[Any], Any] | None = None
+    plot_kinds: tuple[str, ...] = ()
+    plots: Callable[[], Mapping[str, Any]] | None = None
 
 
 def later(module: str, name: str) -> Callable[..., Any]:

@@ -14,4 +14,6 @@ FAMILY = Family(
     build_model,
     validate,
     consistency_check=later("cayley_heyoka.orbit.cartesian_check", "check_orbit"),
+    plot_kinds=("orbit",),
+    plots=later("cayley_heyoka.orbit.plots", "plots"),
 )

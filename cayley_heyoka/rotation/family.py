@@ -14,4 +14,6 @@ FAMILY = Family(
     build_model,
     consistency_check=later("cayley_heyoka.rotation.closed_form_check", "check_rotation"),
     closed_form=later("cayley_heyoka.rotation.free_body_reference", "closed_form"),
+    plot_kinds=("polhode", "crossings"),
+    plots=later("cayley_heyoka.rotation.plots", "plots"),
 )

@@ -229,7 +229,7 @@ def projectile_result(hostile, tmp_path) -> Path:
     [
         ("drift", "p.png", "series: nothing to draw on log axes"),
         ("drift", "p.weird", "out: p.weird asks for format 'weird'"),
-        ("orbit", "p.png", "kind 'orbit' needs the position"),
+        ("orbit", "p.png", "kind 'orbit' is drawn for orbit results"),
     ],
 )
 def test_plot_that_cannot_be_drawn_is_refused(
