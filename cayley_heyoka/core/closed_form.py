@@ -55,6 +55,20 @@ class ClosedForm:
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
         raise NotImplementedError
 
+    @staticmethod
+    def _outputs(model: Any, job: Any, events: tuple[str, ...] = ()) -> tuple[tuple, tuple] | None:
+        """The model's output variables and monitors when the closed form (its ``job`` class's
+        ``VARIABLES`` and ``MONITORS``) gives every one of them and the model records only the
+        ``events`` it also gives; None otherwise."""
+        variables, monitors = tuple(model.outputs), tuple(model.monitors)
+        if (
+            set(variables) <= set(job.VARIABLES)
+            and set(monitors) <= set(job.MONITORS)
+            and all(e.name in events for e in model.events)
+        ):
+            return variables, monitors
+        return None
+
     def evaluate(
         self, prec: Precision, workers: int | None, progress: Any, store: Path | None = None
     ) -> tuple[Any, Certificate, int]:

@@ -29,13 +29,10 @@ class ProjectileClosedForm(ClosedForm):
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
         from .projectile_job import ProjectileJob
 
-        variables, monitors = tuple(model.outputs), tuple(model.monitors)
-        if not (
-            set(variables) <= set(ProjectileJob.VARIABLES)
-            and set(monitors) <= set(ProjectileJob.MONITORS)
-            and not model.events
-        ):
+        names = self._outputs(model, ProjectileJob)
+        if names is None:
             return None
+        variables, monitors = names
         h = self.scene.model
         c = h.constants
         return ProjectileJob(

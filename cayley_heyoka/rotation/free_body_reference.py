@@ -35,13 +35,10 @@ class FreeBodyClosedForm(ClosedForm):
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
         from .free_body_job import FreeBodyJob
 
-        variables, monitors = tuple(model.outputs), tuple(model.monitors)
-        if not (
-            set(variables) <= set(FreeBodyJob.VARIABLES)
-            and set(monitors) <= set(FreeBodyJob.MONITORS)
-            and all(e.name == "invariable_plane" for e in model.events)
-        ):
+        names = self._outputs(model, FreeBodyJob, events=("invariable_plane",))
+        if names is None:
             return None
+        variables, monitors = names
         body = self.scene.model
         dps = prec.dps
         # The attitude as the run starts it (a matrix or an unnormalised quaternion included),
