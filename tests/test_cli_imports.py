@@ -76,6 +76,15 @@ def test_info_reads_files_without_heyoka(name):
     assert not {"heyoka", "matplotlib", "tqdm", "sympy", "dask"} & set(loaded)
 
 
+def test_info_describes_variables_without_heyoka():
+    """``info --variables`` asks the result's family what each variable is: the family's
+    record and its descriptions load without the engine."""
+    argv = ["info", "--variables", str(DATA / "result_v1_double.h5")]
+    code, loaded = _loaded(argv, HEAVY)
+    assert code == 0
+    assert not {"heyoka", "matplotlib", "tqdm", "sympy", "dask"} & set(loaded)
+
+
 def test_a_quad_result_is_read_with_heyoka():
     """The counterpart of the above: real128 numbers need heyoka's type (so the check above
     would see an import of heyoka if info made one)."""

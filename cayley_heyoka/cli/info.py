@@ -16,6 +16,11 @@ def add_parser(subparsers: Any) -> None:
     """Add ``info`` to the ``cayley-heyoka`` command."""
     p = subparsers.add_parser("info", help="summarise a result file")
     p.add_argument("result", type=Path)
+    p.add_argument(
+        "--variables",
+        action="store_true",
+        help="also say what each output and monitor of a result file is",
+    )
     p.set_defaults(handler=command)
 
 
@@ -36,9 +41,12 @@ def command(args: argparse.Namespace) -> int:
             text = CheckReport.load(path).text()
         else:  # a result, or whatever it is: the loader says what is wrong with it
             from ..core.result import Result
-            from .show import summary
+            from .show import summary, variable_lines
 
-            text = summary(Result.load(path))
+            result = Result.load(path)
+            text = summary(result)
+            if args.variables:
+                text += "\n" + "\n".join(variable_lines(result))
     except ResultFileError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

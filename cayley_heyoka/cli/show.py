@@ -89,6 +89,25 @@ def summary(result: Result) -> str:
     return "\n".join(lines)
 
 
+def variable_lines(result: Result) -> list[str]:
+    """What each variable and monitor of ``result`` is, in its family's words
+    (``Family.variables``; the family's record loads without heyoka)."""
+    from ..core.errors import SceneError
+    from ..core.families import FAMILIES, family_of
+
+    try:
+        family = FAMILIES[family_of(result.scene)]
+    except SceneError as exc:  # a family of another package, not installed here
+        return [f"  variables     not described: {exc.constraint}"]
+    lines = ["  variables     what each output and monitor is:"]
+    for name in (*result.variables, *result.monitors):
+        text = family.variables(result.scene, name) if family.variables is not None else None
+        lines.append(
+            f"    {name:<20} {text or '(not described by the ' + family.name + ' family)'}"
+        )
+    return lines
+
+
 def _sci(value: Any) -> str:
     """``value`` to four digits; a quad or MPFR number beyond double's range is not 'inf'."""
     import math

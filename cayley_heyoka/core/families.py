@@ -57,6 +57,9 @@ class Family:
         The kinds of plot the family draws beside the drift (``cayley-heyoka plot --kind``).
     plots
         ``() -> {kind: Plot}`` (:mod:`.figures`), loaded when a plot is drawn; None without.
+    variables
+        ``(scene, name) -> str | None``: what an output or monitor of the family's results is
+        (``cayley-heyoka info --variables``); a light module, loaded without heyoka.
     """
 
     name: str
@@ -70,14 +73,19 @@ class Family:
     closed_form: Callable[[Any], Any] | None = None
     plot_kinds: tuple[str, ...] = ()
     plots: Callable[[], Mapping[str, Any]] | None = None
+    variables: Callable[[Mapping[str, Any], str], str | None] | None = None
 
 
 def later(module: str, name: str) -> Callable[..., Any]:
-    """``module.name`` called with the same arguments, imported at the first call (a family's
-    checks and closed forms load only when used)."""
+    """``module.name`` (``name`` may be dotted: ``"Class.method"``) called with the same
+    arguments, imported at the first call: a family's record imports nothing of the family,
+    so finding a scene's family, or describing a result's variables, loads no heyoka."""
 
     def call(*args: Any) -> Any:
-        return getattr(import_module(module), name)(*args)
+        target: Any = import_module(module)
+        for part in name.split("."):
+            target = getattr(target, part)
+        return target(*args)
 
     call.__qualname__ = f"later({module}.{name})"
     return call

@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 from ..core.families import Family, later
-from .model import build_model
-from .scene import Hamiltonian
 
 FAMILY = Family(
     "hamiltonian",
     "hamiltonian",
     ("hamiltonian", "initial"),
-    Hamiltonian.parse,
-    build_model,
+    later("cayley_heyoka.hamilton.scene", "Hamiltonian.parse"),
+    later("cayley_heyoka.hamilton.model", "build_model"),
     output_keys=("principal_function",),
     consistency_check=later("cayley_heyoka.hamilton.projectile_check", "check_hamiltonian"),
     closed_form=later("cayley_heyoka.hamilton.projectile_reference", "closed_form"),
+    variables=later("cayley_heyoka.hamilton.variables", "describe"),
 )

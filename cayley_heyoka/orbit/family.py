@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 from ..core.families import Family, later
-from .model import build_model, validate
-from .scene import Orbit
 
 FAMILY = Family(
     "orbit",
     "orbit",
     ("orbit", "perturbations", "reference_plane"),
-    Orbit.parse,
-    build_model,
-    validate,
+    later("cayley_heyoka.orbit.scene", "Orbit.parse"),
+    later("cayley_heyoka.orbit.model", "build_model"),
+    later("cayley_heyoka.orbit.model", "validate"),
     consistency_check=later("cayley_heyoka.orbit.cartesian_check", "check_orbit"),
     plot_kinds=("orbit",),
     plots=later("cayley_heyoka.orbit.plots", "plots"),
+    variables=later("cayley_heyoka.orbit.variables", "describe"),
 )

@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 from ..core.families import Family, later
-from .model import build_model
-from .scene import RigidBody
 
 FAMILY = Family(
     "rotation",
     "body",
     ("body", "initial", "attitude", "forces"),
-    RigidBody.parse,
-    build_model,
+    later("cayley_heyoka.rotation.scene", "RigidBody.parse"),
+    later("cayley_heyoka.rotation.model", "build_model"),
     consistency_check=later("cayley_heyoka.rotation.closed_form_check", "check_rotation"),
     closed_form=later("cayley_heyoka.rotation.free_body_reference", "closed_form"),
     plot_kinds=("polhode", "crossings"),
     plots=later("cayley_heyoka.rotation.plots", "plots"),
+    variables=later("cayley_heyoka.rotation.variables", "describe"),
 )
