@@ -11,7 +11,7 @@ family's module is imported the first time the registry is asked for it.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import import_module
 from typing import Any
 
@@ -60,6 +60,9 @@ class Family:
     variables
         ``(scene, name) -> str | None``: what an output or monitor of the family's results is
         (``cayley-heyoka info --variables``); a light module, loaded without heyoka.
+    references
+        The family's closed forms for users, public name → module
+        (:mod:`cayley_heyoka.reference` serves them).
     """
 
     name: str
@@ -74,6 +77,7 @@ class Family:
     plot_kinds: tuple[str, ...] = ()
     plots: Callable[[], Mapping[str, Any]] | None = None
     variables: Callable[[Mapping[str, Any], str], str | None] | None = None
+    references: Mapping[str, str] = field(default_factory=dict)
 
 
 def later(module: str, name: str) -> Callable[..., Any]:

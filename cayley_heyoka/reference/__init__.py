@@ -18,40 +18,23 @@ from __future__ import annotations
 from importlib import import_module
 from typing import Any
 
-from ..core.accuracy import PrecisionNotReached
+from ..core.accuracy import PrecisionNotReached as PrecisionNotReached
+from ..core.families import FAMILIES
 
-# The solutions live beside the equations they solve (rotation/, later orbit/, hamilton/) and
-# import .accuracy from here, so they are loaded on first use rather than at import time.
-_HOMES = {
-    "Crossing": "..rotation.closed_form",
-    "FreeBodyState": "..rotation.closed_form",
-    "FreeRigidBody": "..rotation.closed_form",
-    "free_rigid_body": "..rotation.closed_form",
-    "Euler1758": "..rotation.euler1758",
-    "Cayley1846": "..rotation.cayley1846",
-    "projectile_solution": "..hamilton.projectile",
-    "principal_function": "..hamilton.projectile",
-    "ProjectileSolution": "..hamilton.projectile",
-    "PrincipalFunction": "..hamilton.projectile",
-}
+
+def _homes() -> dict[str, str]:
+    """Each public closed-form name and the module that holds it, as the families declare
+    them (``Family.references``); the solutions load on first use."""
+    return {
+        name: module for family in FAMILIES for name, module in FAMILIES[family].references.items()
+    }
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        return getattr(import_module(_HOMES[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module = _homes().get(name) if not name.startswith("_") else None
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(import_module(module), name)
 
 
-__all__ = [
-    "Cayley1846",
-    "Crossing",
-    "Euler1758",
-    "FreeBodyState",
-    "FreeRigidBody",
-    "PrecisionNotReached",
-    "PrincipalFunction",
-    "ProjectileSolution",
-    "free_rigid_body",
-    "principal_function",
-    "projectile_solution",
-]
+__all__ = sorted(["PrecisionNotReached", *_homes()])

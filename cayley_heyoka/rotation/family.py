@@ -15,4 +15,12 @@ FAMILY = Family(
     plot_kinds=("polhode", "crossings"),
     plots=later("cayley_heyoka.rotation.plots", "plots"),
     variables=later("cayley_heyoka.rotation.variables", "describe"),
+    references={
+        **dict.fromkeys(
+            ("Crossing", "FreeBodyState", "FreeRigidBody", "free_rigid_body"),
+            "cayley_heyoka.rotation.closed_form",
+        ),
+        "Euler1758": "cayley_heyoka.rotation.euler1758",
+        "Cayley1846": "cayley_heyoka.rotation.cayley1846",
+    },
 )
