@@ -2,7 +2,8 @@
 
 Layers: ``cli`` → ``workflows`` (and the public ``reference`` facade) → the families
 (``rotation``, ``orbit``, ``hamilton``, independent of each other) → ``mechanics`` → ``core``.
-The import contracts are import-linter's (``pyproject.toml``, run by ``lint-imports`` in CI);
+The import contracts are import-linter's (``pyproject.toml``, run by ``lint-imports`` in CI):
+the layers, and no import of a family from the workflows, the command line or the facades;
 here the same contracts run inside the test suite, with what import-linter does not check:
 no import cycle anywhere in the package, every name a public module advertises bound, and each
 public name given one home (heyoka.py's ``test_package_layout.py`` is the model).
