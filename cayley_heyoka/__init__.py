@@ -34,6 +34,7 @@ _EXPORTS = {
     "Scene": "core.scene",
     "load_scene": "core.scene",
     "check_scene": "workflows.checks",
+    "cite": "core.citation",
     "ensemble_state": "workflows.ensemble",
     "generate_reference": "workflows.reference",
     "read_certificate": "workflows.reference",
@@ -44,6 +45,7 @@ _EXPORTS = {
 _MODULES = {"plots": "workflows.plots"}
 
 if TYPE_CHECKING:
+    from .core.citation import cite
     from .core.compiler import clear_cache, compile_model
     from .core.engine import run
     from .core.errors import IntegrationError, Interrupted, SceneError
@@ -115,6 +117,7 @@ __all__ = [
     "Scene",
     "SceneError",
     "check_scene",
+    "cite",
     "clear_cache",
     "compile_model",
     "ensemble_state",

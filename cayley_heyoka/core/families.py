@@ -63,6 +63,9 @@ class Family:
     references
         The family's closed forms for users, public name → module
         (:mod:`cayley_heyoka.reference` serves them).
+    memoirs
+        Keys of :data:`.citation.MEMOIRS`: the memoirs the family's equations implement
+        (:func:`cayley_heyoka.cite`).
     """
 
     name: str
@@ -78,6 +81,7 @@ class Family:
     plots: Callable[[], Mapping[str, Any]] | None = None
     variables: Callable[[Mapping[str, Any], str], str | None] | None = None
     references: Mapping[str, str] = field(default_factory=dict)
+    memoirs: tuple[str, ...] = ()
 
 
 def later(module: str, name: str) -> Callable[..., Any]:

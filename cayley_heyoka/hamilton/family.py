@@ -18,4 +18,5 @@ FAMILY = Family(
         ("projectile_solution", "principal_function", "ProjectileSolution", "PrincipalFunction"),
         "cayley_heyoka.hamilton.projectile",
     ),
+    memoirs=("hamilton1835",),
 )

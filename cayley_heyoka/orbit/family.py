@@ -15,4 +15,5 @@ FAMILY = Family(
     plot_kinds=("orbit",),
     plots=later("cayley_heyoka.orbit.plots", "plots"),
     variables=later("cayley_heyoka.orbit.variables", "describe"),
+    memoirs=("cayley1860",),
 )

@@ -23,4 +23,5 @@ FAMILY = Family(
         "Euler1758": "cayley_heyoka.rotation.euler1758",
         "Cayley1846": "cayley_heyoka.rotation.cayley1846",
     },
+    memoirs=("cayley1843", "cayley1846", "euler1758"),
 )
