@@ -95,6 +95,29 @@ class Result:
         """Whether every output time was reached."""
         return self.status == 0
 
+    def __repr__(self) -> str:
+        """One line: the scene, the span, the steps, how it ended, the worst conserved drift
+        (REBOUND's ``Simulation`` and scipy's ``solve_ivp`` result are the models)."""
+        title = self.scene.get("title") or "untitled"
+        n = len(self.t)
+        span = f"t = {float(self.t[0]):g} … {float(self.t[-1]):g}" if n else "no output"
+        ended = "completed" if self.success else "stopped early"
+        worst = ""
+        drifts = {}
+        for name in self.conserved if n else ():
+            d = np.abs(np.asarray(self.drift(name), dtype=float))
+            if d.size:
+                drifts[name] = float(np.nanmax(d))
+        if drifts:
+            name = max(drifts, key=drifts.get)
+            worst = f", worst drift {name} {drifts[name]:.1e}"
+        steps = self.counters.get("steps")
+        stepped = f", {steps} steps" if steps is not None else ""
+        return (
+            f"<Result {title!r}: {self.precision.name}, {n} outputs, {span}{stepped}, "
+            f"{ended}{worst}>"
+        )
+
     @property
     def names(self) -> list[str]:
         """Variable names, in the row order of :attr:`y`."""

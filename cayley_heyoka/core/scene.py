@@ -363,6 +363,16 @@ class Scene:
             spec.validate(scene)
         return scene
 
+    def __repr__(self) -> str:
+        """One line: the family, the title, the precision and tolerance, the output times."""
+        options = self.integrator
+        tolerance = "auto" if options.tolerance is None else options.tolerance
+        title = self.title or "untitled"
+        return (
+            f"<Scene {self.family} {title!r}: {options.precision.name}, tolerance {tolerance}, "
+            f"{self.output.count} output times>"
+        )
+
     @classmethod
     def from_toml(cls, text: str) -> Scene:
         """Parse TOML text (floats kept as their decimal text)."""

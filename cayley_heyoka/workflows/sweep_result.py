@@ -80,6 +80,25 @@ class SweepResult:
     def __len__(self) -> int:
         return len(self.status)
 
+    def __repr__(self) -> str:
+        """One line: the study, the members and how many completed, the worst final drift."""
+        title = self.study.get("title") or "untitled"
+        completed = int(np.count_nonzero(self.completed))
+        worst = ""
+        finals = {}
+        for name in self.drift:
+            final = np.where(self.completed, self.final_drift(name), np.nan)
+            if not np.all(np.isnan(final)):
+                finals[name] = float(np.nanmax(final))
+        if finals:
+            name = max(finals, key=finals.get)
+            worst = f", worst final drift {name} {finals[name]:.1e}"
+        over = ", ".join(self.parameters) or "no parameter"
+        return (
+            f"<SweepResult {title!r}: {len(self)} members over {over}, {self.precision.name}, "
+            f"{len(self.t)} outputs, {completed} completed{worst}>"
+        )
+
     @property
     def completed(self) -> np.ndarray:
         """Boolean mask of the members that reached the last output time."""
