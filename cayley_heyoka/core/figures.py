@@ -32,6 +32,12 @@ class PlotError(ValueError):
     """The file or result cannot be drawn as the requested kind (the message says why)."""
 
 
+def refuse(kind: str, why: str) -> PlotError:
+    """The refusal of a plot ``kind``: ``kind 'polhode' needs ...`` (the workflow adds which
+    kinds the result supports)."""
+    return PlotError(f"kind {kind!r} {why}")
+
+
 def as_float(a: Any) -> np.ndarray:
     """Plot coordinates: any precision's numbers as float64 (real128 and real convert)."""
     return np.asarray(a, dtype=np.float64)

@@ -10,10 +10,10 @@ import numpy as np
 from ..core.figures import (
     TIME,
     Plot,
-    PlotError,
     as_float,
     beside_3d,
     pyplot_figure,
+    refuse,
     require_3d,
     scene_title,
     wrap,
@@ -27,10 +27,6 @@ if TYPE_CHECKING:
 
 #: Figure size in inches.
 SIZES = {"orbit": (12.0, 8.0)}
-
-
-def _refuse(kind: str, why: str) -> PlotError:
-    return PlotError(f"kind {kind!r} {why}")
 
 
 #: The side panels of the orbit figure beside r: label and colour.
@@ -70,7 +66,7 @@ def _position(result: Result) -> np.ndarray:
     missing = [k for k in ("x", "y", "z") if k not in result.variables]
     if missing:
         have = ", ".join(result.variables) or "none"
-        raise _refuse(
+        raise refuse(
             "orbit",
             f"needs the position x, y, z of an orbit result (missing: {', '.join(missing)}; "
             f"variables: {have})",

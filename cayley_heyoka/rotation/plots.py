@@ -10,10 +10,10 @@ import numpy as np
 from ..core.figures import (
     TIME,
     Plot,
-    PlotError,
     as_float,
     beside_3d,
     pyplot_figure,
+    refuse,
     require_3d,
     scene_title,
     wrap,
@@ -29,10 +29,6 @@ if TYPE_CHECKING:
 SIZES = {"polhode": (12.0, 7.0), "crossings": (11.0, 5.0)}
 
 
-def _refuse(kind: str, why: str) -> PlotError:
-    return PlotError(f"kind {kind!r} {why}")
-
-
 _AXIS_LABELS = ("x1", "y1", "z1")
 
 
@@ -46,13 +42,13 @@ def _rates(result: Result, kind: str) -> tuple[np.ndarray, np.ndarray]:
     """Body rates as a (3, n) float array and the principal moments (A, B, C)."""
     have = ", ".join(result.variables) or "none"
     if "body" not in result.scene:
-        raise _refuse(
+        raise refuse(
             kind,
             f"needs a rigid-body result (a [body] scene, rates p, q, r); this one has: {have}",
         )
     missing = [k for k in ("p", "q", "r") if k not in result.variables]
     if missing:
-        raise _refuse(kind, f"needs the body rates p, q, r (missing: {', '.join(missing)})")
+        raise refuse(kind, f"needs the body rates p, q, r (missing: {', '.join(missing)})")
     rates = np.array([as_float(result.variables[k]) for k in ("p", "q", "r")])
     inertia = np.array([float(x) for x in result.scene["body"]["inertia"]])
     return rates, inertia
@@ -168,7 +164,7 @@ def crossings(result: Result, ax: Axes | None = None) -> Axes:
     log = result.events.get("invariable_plane")
     if log is None:
         recorded = ", ".join(result.events) or "none"
-        raise _refuse(
+        raise refuse(
             "crossings",
             f"needs the invariable_plane event, which this run did not record (events: "
             f'{recorded}); add output.events = ["invariable_plane"] to the scene and run again',

@@ -30,6 +30,7 @@ from ..core.figures import (
     as_float,
     colours,
     pyplot_figure,
+    refuse,
     scene_title,
     wrap,
 )
@@ -69,7 +70,7 @@ def supported_kinds(result: Result) -> tuple[str, ...]:
 
 
 def _refuse(result: Result, kind: str, why: str) -> PlotError:
-    return PlotError(f"kind {kind!r} {why}{_supported(result)}")
+    return PlotError(f"{refuse(kind, why)}{_supported(result)}")
 
 
 def _supported(result: Result) -> str:
