@@ -99,6 +99,21 @@ def test_step_budget_stops_cleanly_and_keeps_the_same_bits():
     _same(part, whole, rows=len(part.t))
 
 
+def test_a_stopped_run_can_be_returned_instead_of_raised(tmp_path):
+    """``raise_on_failure=False``: the same partial result the error carries, returned with
+    ``success`` False (solve_ivp's convention), and it survives a save and load."""
+    whole = ch.run(_scene())
+    budget = whole.counters["steps"] // 2
+    part = ch.run(_scene(integrator={"max_steps": budget}), raise_on_failure=False)
+    assert not part.success and part.status == -1
+    assert f"integrator.max_steps = {budget}" in part.message
+    _same(part, whole, rows=len(part.t))
+    part.save(tmp_path / "part.h5")
+    back = ch.load_result(tmp_path / "part.h5")
+    assert not back.success and back.message == part.message and len(back.t) == len(part.t)
+    assert ch.run(_scene(), raise_on_failure=False).success
+
+
 def test_interrupt_keeps_what_was_computed():
     """SIGINT during propagation (sent from the progress callback, so at a known time, after
     the first call's steps, whose progress is held until they are kept): an Interrupted

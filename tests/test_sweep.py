@@ -335,13 +335,19 @@ def test_the_file_has_the_documented_layout(body_sweep):
         assert json.loads(f.attrs["study"])["sweep"]["parameters"]["initial.rates[1]"][1] == "1e160"
         meta = json.loads(f.attrs["metadata"])
         assert meta["backend"] == "local" and meta["complete"] and meta["heyoka"]
-        assert f["t"].shape == (21,) and f["t"].dtype == np.float64
-        assert set(f["parameters"]) == {"initial.rates[1]", "body.inertia[1]"}
-        np.testing.assert_array_equal(f["parameters"]["body.inertia[1]"][()], [1.5, 2] * 3)
-        for name in ("energy", "momentum_squared", "momentum_space"):
-            assert f["drift"][name].shape == (6, 21) and f["drift"][name].dtype == np.float64
-        assert f["final_state"].shape == (6, len(json.loads(f["final_state"].attrs["names"])))
+        assert f.attrs["format_version"] == 3 and f.attrs["Conventions"] == "CF-1.10"
+        assert f["time"].shape == (21,) and f["time"].dtype == np.float64
+        order = json.loads(f.attrs["order"])
+        assert order["parameters"] == ["initial.rates[1]", "body.inertia[1]"]
+        np.testing.assert_array_equal(f["body.inertia[1]"][()], [1.5, 2] * 3)
+        assert [m.decode() for m in f["monitor"][()]] == order["drift"]
+        assert set(order["drift"]) == {"energy", "momentum_squared", "momentum_space"}
+        assert f["drift"].shape == (3, 6, 21) and f["drift"].dtype == np.float64
+        assert f["final_state"].shape == (6, len(order["final"]))
         np.testing.assert_array_equal(f["status"][()], [OK, OK, FAILED, FAILED, OK, OK])
+        # netCDF-4: each array names its dimensions; the parameters are member coordinates.
+        assert [d[0].name for d in f["drift"].dims] == ["/monitor", "/member", "/time"]
+        assert f["steps"].attrs["coordinates"] == "initial.rates[1] body.inertia[1]"
         assert f["message"].shape == f["steps"].shape == (6,)
     loaded = SweepResult.load(out)
     for name in result.drift:

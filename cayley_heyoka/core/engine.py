@@ -35,13 +35,13 @@ from .model import Model, own_terminal
 from .precision import Precision, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
 from .result import Result, versions
-from .scene import Scene
+from .scene import Scene, check_units
 from .signals import WORKER, DeferredSignals
 
 Progress = Callable[[float], None]
 
 
-def run(scene: Scene, progress: Progress | None = None) -> Result:
+def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: bool = True) -> Result:
     """Integrate a scene and record its outputs, events and monitors.
 
     Parameters
@@ -50,19 +50,25 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
         A validated :class:`~cayley_heyoka.core.scene.Scene`.
     progress
         Called with the current time after each step (slows stepping; for progress bars).
+    raise_on_failure
+        If True (the default), a run that stops before the last output time raises
+        :class:`IntegrationError`. If False it returns its result, as
+        :func:`scipy.integrate.solve_ivp` does: ``success`` False, ``status`` −1 and
+        ``message`` saying why, with every output time reached before the stop (for a sweep
+        or a study that tallies failures instead of catching them).
 
     Returns
     -------
     Result
-        Every output time.
+        Every output time (or, with ``raise_on_failure=False``, those reached).
 
     Raises
     ------
     SceneError
         If the scene cannot be run (see the module docstring).
     IntegrationError
-        If the run stops early (a non-finite state, a terminal event, the step budget); its
-        ``result`` holds what was computed up to there.
+        If the run stops early (a non-finite state, a terminal event, the step budget) and
+        ``raise_on_failure`` is True; its ``result`` holds what was computed up to there.
     Interrupted
         On Ctrl-C (or another signal raising KeyboardInterrupt) during the propagation; its
         ``result`` holds what was computed, marked interrupted.
@@ -78,7 +84,7 @@ def run(scene: Scene, progress: Progress | None = None) -> Result:
         result = propagation.result()
     finally:
         propagation.release()
-    if result.status != 0:
+    if result.status != 0 and raise_on_failure:
         raise IntegrationError(result.message, result)
     return result
 
@@ -152,6 +158,7 @@ class Propagation:
             # the integrator holds its leading part, copied back whenever a handler changes it.
             self._pars = prec.array(model.pars.values)
         check_fits(scene, model)
+        check_units(scene, [*model.outputs, *model.monitors])
         self.grid = scene.output.time_grid(prec)
         require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
         require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")

@@ -32,8 +32,13 @@ from typing import Any
 
 import numpy as np
 
-#: Version of the layout of result, sweep and check files; version 2 added the checksum.
-FORMAT_VERSION = 2
+#: Version of the layout of result, sweep and check files; version 2 added the checksum,
+#: version 3 the netCDF-4 layout of results and sweeps (named dimensions: any netCDF reader,
+#: xarray among them, opens the file). Older versions are still read.
+FORMAT_VERSION = 3
+#: HDF5's dimension-scale bookkeeping: object references, i.e. addresses in the file. The
+#: checksum takes the attachments by name instead (:func:`digest`).
+_SCALE_ATTRIBUTES = frozenset({"DIMENSION_LIST", "REFERENCE_LIST"})
 #: The ``format`` attribute of each kind of HDF5 file we write.
 FORMATS = {
     "result": "cayley_heyoka.result",
@@ -260,7 +265,8 @@ def write_hdf5(path: str | Path, fill: Callable[[Any], None]) -> None:
     import h5py
 
     def write(tmp: Path) -> None:
-        with h5py.File(tmp, "w") as f:
+        # Creation order kept, as netCDF-4 keeps it: readers list variables as written.
+        with h5py.File(tmp, "w", track_order=True) as f:
             fill(f)
             seal(f)
 
@@ -394,7 +400,9 @@ def digest(f: Any) -> str:
     """SHA-256 of an HDF5 file's contents: every attribute (but the checksum) and dataset.
 
     Objects are visited by name in sorted order and every item is length-prefixed, so the
-    digest depends on the contents only, not on where HDF5 put them in the file.
+    digest depends on the contents only, not on where HDF5 put them in the file. A dataset's
+    dimension scales count by their names (their HDF5 attributes hold addresses); a file
+    without them (format version 2) digests as it always did.
     """
     import h5py
 
@@ -407,11 +415,13 @@ def digest(f: Any) -> str:
     def visit(obj: Any, name: str) -> None:
         add(name.encode())
         for key in sorted(obj.attrs):
-            if name == "/" and key == DIGEST:
+            if (name == "/" and key == DIGEST) or key in _SCALE_ATTRIBUTES:
                 continue
             add(key.encode())
             add(_value_bytes(obj.attrs[key]))
         if isinstance(obj, h5py.Dataset):
+            if "DIMENSION_LIST" in obj.attrs:
+                add(b"dims" + json.dumps(_scale_names(obj)).encode())
             add(_value_bytes(obj[()]))
         else:
             for key in sorted(obj):
@@ -419,6 +429,16 @@ def digest(f: Any) -> str:
 
     visit(f, "/")
     return h.hexdigest()
+
+
+def _scale_names(ds: Any) -> list[list[str]] | str:
+    """The names of the dimension scales attached to each axis of ``ds``; ``"unresolved"``
+    when a reference leads nowhere (a scale deleted after it was attached), which the
+    reading then reports as the missing dataset it is."""
+    try:
+        return [[scale.name for scale in dim.values()] for dim in ds.dims]
+    except (RuntimeError, KeyError, ValueError, OSError):
+        return "unresolved"
 
 
 def _value_bytes(value: Any) -> bytes:

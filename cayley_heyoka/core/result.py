@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from .files import FORMAT_VERSION, FORMATS, open_ours, write_hdf5
+from .labelled import COMPONENTS, component_dim
 from .precision import Precision
 
 
@@ -67,7 +68,10 @@ class Result:
     precision
         The floating-point precision of the run.
     status
-        0 if every output time was reached, -1 if the run stopped early.
+        0 if every output time was reached, -1 if the run stopped early (a non-finite state,
+        a family's stop, the step budget), -2 if it was interrupted (Ctrl-C, SIGTERM). A
+        stopped run raises unless ``run(..., raise_on_failure=False)``; its result, and a
+        file saved from one, keep the status.
     message
         Why the run ended.
     counters
@@ -92,7 +96,7 @@ class Result:
 
     @property
     def success(self) -> bool:
-        """Whether every output time was reached."""
+        """Whether every output time was reached (``status == 0``)."""
         return self.status == 0
 
     def __repr__(self) -> str:
@@ -157,6 +161,60 @@ class Result:
             out[name] = float(np.max(np.abs(d[-1]))) if len(d) else float("nan")
         return out
 
+    # ------------------------------------------------------------------ labelled views
+    def to_xarray(self, *, as_double: bool = False) -> Any:
+        """The result as an :class:`xarray.Dataset` over the dimension ``time``.
+
+        Every variable and monitor is a data variable (a vector monitor over ``(time,
+        component)``, components ``x, y, z``) with its ``long_name`` and, where the scene's
+        ``output.units`` gives one, ``units``; the attributes hold the title, precision,
+        status, message, conserved monitors, counters and the scene (JSON). It matches what
+        ``xarray.open_dataset(path, engine="h5netcdf")`` reads from the saved file (there, an
+        extended-precision result is its exact decimal text). Events: ``to_pandas("events")``.
+
+        Parameters
+        ----------
+        as_double
+            For a quad or multiprecision result: round every number to float64, and say so
+            (``attrs["rounded_from"]``). By default such a result's arrays hold its own exact
+            numbers (object arrays of heyoka ``real128`` or ``real``), and
+            ``attrs["precision"]`` names the precision. A double result is float64 either way.
+
+        Raises
+        ------
+        ImportError
+            If xarray is not installed (``pip install "cayley_heyoka[xarray]"``).
+        """
+        from .labelled import result_dataset
+
+        return result_dataset(self, as_double=as_double)
+
+    def to_pandas(self, table: str = "outputs", *, as_double: bool = False) -> Any:
+        """A table of the result as a :class:`pandas.DataFrame`.
+
+        Parameters
+        ----------
+        table
+            ``"outputs"``: one row per output time (index ``time``), one column per variable
+            and monitor, a vector monitor's components as ``NAME_x``, ``NAME_y``,
+            ``NAME_z``. ``"events"``: one row per event occurrence in time order, columns
+            ``event``, ``time``, ``direction`` (+1 up, −1 down) and ``label``.
+        as_double
+            As for :meth:`to_xarray`: extended precision stays exact (object columns) unless
+            this asks for float64; ``frame.attrs["precision"]`` says which.
+
+        Raises
+        ------
+        ValueError
+            If ``table`` is not one of the tables above.
+        ImportError
+            If pandas is not installed.
+        """
+        from .labelled import choose, events_frame, result_frame
+
+        build = choose(table, {"outputs": result_frame, "events": events_frame})
+        return build(self, as_double=as_double)
+
     # ------------------------------------------------------------------ HDF5
     def save(self, path: str | Path) -> None:
         """Write the result to an HDF5 file (layout: ``docs/scenes.md``, "Files").
@@ -173,10 +231,27 @@ class Result:
         write_hdf5(path, self.fill)
 
     def fill(self, f: Any) -> None:
-        """Write the result's groups and attributes into an open HDF5 file."""
+        """Write the result into an open HDF5 file, in the netCDF-4 layout of format 3.
+
+        The root group holds the output times as the dimension ``time`` and every variable
+        and monitor as a dataset over it (a vector monitor over ``(time, component)``), each
+        with a ``long_name`` and, where the scene gives them, ``units``; each event is a
+        group ``events/NAME`` over its own ``time``. So ``xarray.open_dataset(path,
+        engine="h5netcdf")`` (or any netCDF reader) sees named dimensions. Extended-precision
+        arrays are decimal text (attribute ``encoding = "decimal"``), exact.
+        """
         prec = self.precision
+        clash = sorted(set(LAYOUT_NAMES) & {*self.variables, *self.monitors})
+        if clash:
+            raise ValueError(
+                f"an output or monitor is named {', '.join(map(repr, clash))}, which the result "
+                f"file's layout keeps for itself ({', '.join(LAYOUT_NAMES)})"
+            )
         f.attrs["format"] = FORMATS["result"]
         f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["Conventions"] = "CF-1.10"
+        f.attrs["title"] = str(self.scene.get("title") or "")
+        f.attrs["source"] = source_line(self.metadata)
         f.attrs["precision"] = json.dumps(prec.to_spec())
         f.attrs["status"] = self.status
         f.attrs["message"] = self.message
@@ -184,21 +259,55 @@ class Result:
         f.attrs["conserved"] = json.dumps(list(self.conserved))
         f.attrs["scene"] = json.dumps(self.scene)
         f.attrs["metadata"] = json.dumps(self.metadata)
-        write_array(f, "t", self.t, prec)
-        for group, arrays in (("variables", self.variables), ("monitors", self.monitors)):
-            g = f.create_group(group)
-            g.attrs["order"] = json.dumps(list(arrays))
+        f.attrs["order"] = json.dumps(
+            {
+                "variables": list(self.variables),
+                "monitors": list(self.monitors),
+                "events": list(self.events),
+            }
+        )
+        time = write_array(f, "time", self.t, prec)
+        time.make_scale("time")
+        label(time, "time", self.unit("time"))
+        for role, arrays in (("variable", self.variables), ("monitor", self.monitors)):
             for name, arr in arrays.items():
-                write_array(g, name, arr, prec)
-        ge = f.create_group("events")
-        ge.attrs["order"] = json.dumps(list(self.events))
+                ds = write_array(f, name, arr, prec)
+                ds.attrs["role"] = role
+                label(ds, self.describe(name), self.unit(name))
+                ds.dims[0].attach_scale(time)
+                if ds.ndim > 1:
+                    ds.dims[1].attach_scale(component_scale(f, ds.shape[1]))
+        events = f.create_group("events")
         for name, log in self.events.items():
-            g = ge.create_group(name)
-            write_array(g, "time", log.time, prec)
-            g.create_dataset("direction", data=np.asarray(log.direction, dtype=np.int8))
-            g.create_dataset(
+            g = events.create_group(name)
+            when = write_array(g, "time", log.time, prec)
+            when.make_scale("time")
+            label(when, f"times of the event {name}", self.unit("time"))
+            direction = g.create_dataset("direction", data=np.asarray(log.direction, dtype=np.int8))
+            label(direction, "+1 where the event function crossed zero upwards, -1 downwards")
+            labels = g.create_dataset(
                 "label", data=np.asarray(log.label, dtype=object), dtype=string_dtype()
             )
+            label(labels, "what fired")
+            for ds in (direction, labels):
+                ds.dims[0].attach_scale(when)
+
+    def describe(self, name: str) -> str | None:
+        """What the variable or monitor ``name`` is, in its family's words (None if the family
+        does not say, or is not installed here)."""
+        from .errors import SceneError
+        from .families import FAMILIES, family_of
+
+        try:
+            family = FAMILIES[family_of(self.scene)]
+        except SceneError:
+            return None
+        return family.variables(self.scene, name) if family.variables is not None else None
+
+    def unit(self, name: str) -> str | None:
+        """The unit the scene gives ``name`` (``"time"`` for the times) in ``output.units``."""
+        units = self.scene.get("output", {}).get("units", {})
+        return units.get(name) if isinstance(units, dict) else None
 
     @classmethod
     def load(cls, path: str | Path) -> Result:
@@ -208,20 +317,31 @@ class Result:
         ------
         ResultFileError
             Naming the file and what is wrong: missing, not HDF5, not a result file, damaged
-            (its checksum differs) or incomplete. Files of format version 1 load unchecked.
+            (its checksum differs) or incomplete. Files of format version 1 load unchecked;
+            files of versions 1 and 2 (groups ``variables`` and ``monitors``, times ``t``)
+            load as they were written.
         """
         with open_ours(path, "result") as f:
             prec = Precision.from_spec(json.loads(f.attrs["precision"]))
-            variables = {
-                k: read_array(f["variables"][k], prec)
-                for k in json.loads(f["variables"].attrs["order"])
-            }
-            monitors = {
-                k: read_array(f["monitors"][k], prec)
-                for k in json.loads(f["monitors"].attrs["order"])
-            }
+            if int(f.attrs["format_version"]) >= 3:
+                order = json.loads(f.attrs["order"])
+                t = read_array(f["time"], prec)
+                variables = {k: read_array(f[k], prec) for k in order["variables"]}
+                monitors = {k: read_array(f[k], prec) for k in order["monitors"]}
+                event_names = order["events"]
+            else:
+                t = read_array(f["t"], prec)
+                variables = {
+                    k: read_array(f["variables"][k], prec)
+                    for k in json.loads(f["variables"].attrs["order"])
+                }
+                monitors = {
+                    k: read_array(f["monitors"][k], prec)
+                    for k in json.loads(f["monitors"].attrs["order"])
+                }
+                event_names = json.loads(f["events"].attrs["order"])
             events = {}
-            for name in json.loads(f["events"].attrs["order"]):
+            for name in event_names:
                 g = f["events"][name]
                 events[name] = EventLog(
                     time=read_array(g["time"], prec),
@@ -229,7 +349,7 @@ class Result:
                     label=np.array([_text(s) for s in g["label"][()]], dtype=str),
                 )
             return cls(
-                t=read_array(f["t"], prec),
+                t=t,
                 variables=variables,
                 monitors=monitors,
                 conserved=tuple(json.loads(f.attrs["conserved"])),
@@ -241,6 +361,40 @@ class Result:
                 scene=json.loads(f.attrs["scene"]),
                 metadata=json.loads(f.attrs["metadata"]),
             )
+
+
+#: Names the result file's layout takes for itself beside the outputs and monitors.
+LAYOUT_NAMES = ("time", "component", "events", "certificate")
+
+
+def label(ds: Any, long_name: str | None, units: str | None = None) -> None:
+    """Set a dataset's netCDF/CF ``long_name`` and ``units`` (each only if known)."""
+    if long_name:
+        ds.attrs["long_name"] = long_name
+    if units:
+        ds.attrs["units"] = units
+
+
+def component_scale(f: Any, size: int) -> Any:
+    """The dimension of a ``size``-vector's components: ``component`` (x, y, z) for three,
+    ``component_N`` (unlabelled) otherwise; created on first use."""
+    name = component_dim(size)
+    if name not in f:
+        if size == len(COMPONENTS):
+            ds = f.create_dataset(
+                name, data=np.array(COMPONENTS, dtype=object), dtype=string_dtype()
+            )
+        else:
+            ds = f.create_dataset(name, data=np.arange(size, dtype=np.int64))
+        ds.make_scale(name)
+        label(ds, "vector component (space axes)" if size == len(COMPONENTS) else "component")
+    return f[name]
+
+
+def source_line(metadata: dict[str, Any]) -> str:
+    """The CF ``source`` attribute: what wrote the file, with versions."""
+    names = ("cayley_heyoka", "heyoka", "numpy")
+    return ", ".join(f"{k} {metadata[k]}" for k in names if k in metadata) or "cayley_heyoka"
 
 
 @functools.cache
@@ -272,13 +426,15 @@ def string_dtype():
     return h5py.string_dtype(encoding="utf-8")
 
 
-def write_array(group, name: str, arr: np.ndarray, prec: Precision) -> None:
-    """Write ``arr`` into an HDF5 group: float64 in double, else exact decimal text."""
+def write_array(group: Any, name: str, arr: np.ndarray, prec: Precision) -> Any:
+    """Write ``arr`` into an HDF5 group: float64 in double, else exact decimal text; returns
+    the dataset."""
     if prec.kind == "double":
-        group.create_dataset(name, data=np.asarray(arr, dtype=np.float64))
-    else:
-        ds = group.create_dataset(name, data=prec.to_text(arr), dtype=string_dtype())
-        ds.attrs["encoding"] = "decimal"
+        return group.create_dataset(name, data=np.asarray(arr, dtype=np.float64))
+    ds = group.create_dataset(name, data=prec.to_text(arr), dtype=string_dtype())
+    ds.attrs["encoding"] = "decimal"
+    ds.attrs["precision"] = prec.name
+    return ds
 
 
 def read_array(ds, prec: Precision) -> np.ndarray:

@@ -179,12 +179,13 @@ class OutputOptions:
     events: tuple[str, ...] = ()
     monitors: tuple[str, ...] | None = None
     options: Mapping[str, Any] = field(default_factory=dict)
+    units: Mapping[str, str] = field(default_factory=dict)
 
     @classmethod
     def parse(cls, table: Mapping[str, Any], family_keys: Iterable[str] = ()) -> OutputOptions:
         """``family_keys``: output keys a model family adds (kept in :attr:`options`)."""
         family_keys = tuple(family_keys)
-        check_keys(table, ["times", "events", "monitors", *family_keys], "output")
+        check_keys(table, ["times", "events", "monitors", "units", *family_keys], "output")
         if "times" not in table:
             raise SceneError("output.times", "is required ({start, stop, count} or a list)")
         times, grid = _parse_times(table["times"])
@@ -201,7 +202,12 @@ class OutputOptions:
                 raise SceneError(where, f"names {', '.join(map(repr, twice))} more than once")
         options = {k: table[k] for k in family_keys if k in table}
         return cls(
-            times, grid, tuple(events), None if monitors is None else tuple(monitors), options
+            times,
+            grid,
+            tuple(events),
+            None if monitors is None else tuple(monitors),
+            options,
+            _parse_units(table.get("units", {})),
         )
 
     @property
@@ -381,6 +387,39 @@ class Scene:
     def to_dict(self) -> dict[str, Any]:
         """The plain dictionary this scene was built from."""
         return plain_copy(self.source)
+
+
+#: The longest unit text ``output.units`` takes (units are labels, not documents).
+MAX_UNIT_CHARS = 64
+
+
+def _parse_units(table: Any) -> dict[str, str]:
+    """``output.units``: the unit of ``time`` and of any output or monitor, as text that the
+    result files and labelled views carry (CF ``units``); the names are checked against the
+    model when it is built (:func:`check_units`)."""
+    if not isinstance(table, Mapping):
+        raise SceneError("output.units", f'must be a table of name = "unit", got {table!r}')
+    for name, unit in table.items():
+        where = f"output.units.{name}"
+        if not isinstance(unit, str) or not unit.strip():
+            raise SceneError(where, f'must be non-empty text (a unit such as "s"), got {unit!r}')
+        if len(unit) > MAX_UNIT_CHARS or not unit.isprintable():
+            raise SceneError(
+                where, f"must be printable text of at most {MAX_UNIT_CHARS} characters"
+            )
+    return dict(table)
+
+
+def check_units(scene: Scene, names: Iterable[str]) -> None:
+    """Refuse an ``output.units`` entry that names neither ``time`` nor one of ``names`` (the
+    model's outputs and monitors)."""
+    known = ["time", *names]
+    for name in scene.output.units:
+        if name not in known:
+            raise SceneError(
+                f"output.units.{name}",
+                f"is not an output or monitor of this scene (known: {', '.join(known)})",
+            )
 
 
 def load_scene(path: str | Path) -> Scene:

@@ -358,13 +358,18 @@ def _read_sweep(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], str]:
     from ..core.files import open_ours
 
     with open_ours(path, "sweep") as f:  # checksum verified: a damaged file is not drawn
-        complete = "t" in f and "drift" in f and len(f["drift"])
-        if complete:
-            t = np.asarray(f["t"][()], dtype=np.float64)  # decimal text beyond double
+        study = json.loads(f.attrs["study"]) if "study" in f.attrs else {}
+        if int(f.attrs["format_version"]) >= 3:  # drift over (monitor, member, time)
+            monitors = json.loads(f.attrs["order"])["drift"]
+            drift = np.asarray(f["drift"][()], dtype=np.float64)
+            series = {name: drift[i] for i, name in enumerate(monitors)}
+            times = f["time"]
+        else:
             series = {name: np.asarray(d[()], dtype=np.float64) for name, d in f["drift"].items()}
-            study = json.loads(f.attrs["study"]) if "study" in f.attrs else {}
-    if not complete:
-        raise PlotError("a sweep file needs a dataset t and a non-empty group drift")
+            times = f["t"]
+        t = np.asarray(times[()], dtype=np.float64)  # decimal text beyond double
+    if not series:
+        raise PlotError("the sweep recorded no drift (its scene conserves no monitor)")
     return t, series, study.get("title") or f"sweep {path.name}"
 
 

@@ -437,7 +437,10 @@ def _write(
         g.attrs["certified"] = certified
         g.attrs["scaling"] = "absolute where |value| <= 1, relative above"
         for name, err in cert.errors.items():
-            g.create_dataset(name, data=err)
+            ds = g.create_dataset(name, data=err)
+            ds.attrs["long_name"] = f"scaled error bound of {name}"
+            if ds.ndim and ds.shape[0] == len(result.t):  # over the output times
+                ds.dims[0].attach_scale(f["time"])
         ge = g.create_group("events")
         for name, err in cert.event_errors.items():
             ge.create_dataset(name, data=err)

@@ -49,9 +49,11 @@ Progress = Callable[[int, int], None]
 def layout_of(study: Study) -> Layout:
     """The file's columns, from the first member's model."""
     from ..core.families import FAMILIES
+    from ..core.scene import check_units
 
     scene = study.member_scene(0, study.members()[0])
     model = FAMILIES[scene.family].build(scene)
+    check_units(scene, [*model.outputs, *model.monitors])
     events = tuple(dict.fromkeys(e.name for e in model.events))
     grid = scene.output.time_grid(scene.integrator.precision)
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))

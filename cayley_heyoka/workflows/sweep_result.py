@@ -17,6 +17,7 @@ import numpy as np
 
 from ..core.files import FORMAT_VERSION, FORMATS, OutputError, Staged, open_ours, seal, write_hdf5
 from ..core.precision import Precision
+from ..core.result import source_line
 from ..core.scene import Scene
 from .study import Member, Study, show_number
 
@@ -120,6 +121,121 @@ class SweepResult:
             return None
         return int(np.nanargmax(final))
 
+    def to_xarray(self, *, as_double: bool = False) -> Any:
+        """The sweep as an :class:`xarray.Dataset`, as ``xarray.open_dataset(path,
+        engine="h5netcdf")`` reads its file.
+
+        Dimensions ``member``, ``time``, ``monitor`` (the conserved monitors), ``variable``
+        (the result variables) and ``event``; each swept parameter is a coordinate over
+        ``member`` (``ds["initial.rates[0]"]``). Data: ``drift`` (monitor, member, time), the
+        relative drift (NaN after a member stopped); ``final_state`` (member, variable);
+        ``status`` (0 completed, −1 failed, −2 not run), ``message``, ``steps``; ``events``
+        (member, event), the occurrences. ``ds.drift.sel(monitor="energy")`` is one monitor's
+        drift of every member.
+
+        Parameters
+        ----------
+        as_double
+            For a quad or multiprecision sweep, round the times, parameters and final states
+            to float64 and say so (``attrs["rounded_from"]``); by default they keep their
+            exact numbers and ``attrs["precision"]`` names the precision. (Drifts are float64
+            in every precision.)
+
+        Raises
+        ------
+        ImportError
+            If xarray is not installed (``pip install "cayley_heyoka[xarray]"``).
+        """
+        from ..core.labelled import precision_attrs, require, values
+
+        xr = require("xarray")
+        prec = self.precision
+        coords: dict[str, Any] = {
+            "time": ("time", values(self.t, prec, as_double), {"long_name": "time"}),
+            "member": ("member", np.arange(len(self)), {"long_name": "member of the sweep"}),
+            "monitor": ("monitor", list(self.drift)),
+            "variable": ("variable", list(self.final_names)),
+            "event": ("event", list(self.events)),
+        }
+        for name, column in self.parameters.items():
+            coords[name] = (
+                "member",
+                values(column, prec, as_double),
+                {"long_name": f"swept parameter {name}"},
+            )
+        n, m = len(self), len(self.t)
+        drift = np.stack(list(self.drift.values())) if self.drift else np.zeros((0, n, m))
+        counts = np.stack(list(self.events.values()), axis=1) if self.events else np.zeros((n, 0))
+        data = {
+            "drift": (("monitor", "member", "time"), drift),
+            "final_state": (("member", "variable"), values(self.final_state, prec, as_double)),
+            "status": ("member", np.asarray(self.status, dtype=np.int8)),
+            "message": ("member", np.asarray(self.message, dtype=str)),
+            "steps": ("member", np.asarray(self.steps, dtype=np.int64)),
+            "events": (("member", "event"), np.asarray(counts, dtype=np.int64)),
+        }
+        ds = xr.Dataset(data, coords=coords)
+        for name, long_name in (
+            ("drift", "relative drift of each conserved monitor"),
+            ("final_state", "the variables at the last output time"),
+            ("status", "0 completed, -1 failed, -2 not run"),
+            ("message", "why the member ended"),
+            ("steps", "Taylor steps"),
+            ("events", "occurrences of each recorded event"),
+        ):
+            ds[name].attrs["long_name"] = long_name
+        ds.attrs.update(
+            title=str(self.study.get("title") or ""),
+            **precision_attrs(prec, as_double),
+            study=json.dumps(self.study),
+            completed=int(np.count_nonzero(self.completed)),
+        )
+        return ds
+
+    def to_pandas(self, table: str = "members", *, as_double: bool = False) -> Any:
+        """A table of the sweep as a :class:`pandas.DataFrame`.
+
+        Parameters
+        ----------
+        table
+            ``"members"``: one row per member (index ``member``): each swept parameter, the
+            ``status``, ``message`` and ``steps``, ``final_drift_NAME`` for each conserved
+            monitor (NaN where the member did not complete) and ``events_NAME``, the
+            occurrences of each recorded event.
+        as_double
+            For a quad or multiprecision sweep, the parameters as float64 (said in
+            ``frame.attrs``); by default their exact numbers.
+
+        Raises
+        ------
+        ValueError
+            If ``table`` is not ``"members"``.
+        ImportError
+            If pandas is not installed.
+        """
+        from ..core.labelled import choose, precision_attrs, require, values
+
+        choose(table, {"members": None})
+        pd = require("pandas")
+        prec = self.precision
+        columns: dict[str, Any] = {
+            name: values(column, prec, as_double) for name, column in self.parameters.items()
+        }
+        columns.update(
+            status=np.asarray(self.status, dtype=np.int8),
+            message=np.asarray(self.message, dtype=str),
+            steps=np.asarray(self.steps, dtype=np.int64),
+        )
+        for name in self.drift:
+            columns[f"final_drift_{name}"] = np.where(
+                self.completed, self.final_drift(name), np.nan
+            )
+        for name, counts in self.events.items():
+            columns[f"events_{name}"] = np.asarray(counts, dtype=np.int64)
+        frame = pd.DataFrame(columns, index=pd.RangeIndex(len(self), name="member"))
+        frame.attrs.update(precision_attrs(prec, as_double))
+        return frame
+
     def summary(self) -> str:
         """A one-screen account: members, paths, wall time, drifts, the worst members."""
         title = self.study.get("title") or "(untitled study)"
@@ -207,17 +323,36 @@ class SweepResult:
 
         with open_ours(path, "sweep") as f:
             prec = Precision.from_spec(json.loads(f.attrs["precision"]))
-            order = json.loads(f.attrs["order"])
+            if int(f.attrs["format_version"]) >= 3:
+                order = json.loads(f.attrs["order"])
+                t = read_array(f["time"], prec)
+                parameters = {k: read_array(f[k], prec) for k in order["parameters"]}
+                drift = {
+                    k: np.asarray(f["drift"][i], dtype=np.float64)
+                    for i, k in enumerate(order["drift"])
+                }
+                final_names = tuple(order["final"])
+                counts = np.asarray(f["events"][()], dtype=np.int64)
+                events = {k: counts[:, i].copy() for i, k in enumerate(order["events"])}
+            else:  # format versions 1 and 2: groups of parameters, drifts and events
+                order = json.loads(f.attrs["order"])
+                t = read_array(f["t"], prec)
+                parameters = {k: read_array(f["parameters"][k], prec) for k in order["parameters"]}
+                drift = {k: np.asarray(f["drift"][k][()], dtype=np.float64) for k in order["drift"]}
+                final_names = tuple(json.loads(f["final_state"].attrs["names"]))
+                events = {
+                    k: np.asarray(f["events"][k][()], dtype=np.int64) for k in order["events"]
+                }
             return cls(
-                t=read_array(f["t"], prec),
-                parameters={k: read_array(f["parameters"][k], prec) for k in order["parameters"]},
-                drift={k: np.asarray(f["drift"][k][()], dtype=np.float64) for k in order["drift"]},
-                final_names=tuple(json.loads(f["final_state"].attrs["names"])),
+                t=t,
+                parameters=parameters,
+                drift=drift,
+                final_names=final_names,
                 final_state=read_array(f["final_state"], prec),
                 status=np.asarray(f["status"][()], dtype=int),
                 message=np.array([_text(s) for s in f["message"][()]], dtype=object),
                 steps=np.asarray(f["steps"][()], dtype=np.int64),
-                events={k: np.asarray(f["events"][k][()], dtype=np.int64) for k in order["events"]},
+                events=events,
                 precision=prec,
                 study=json.loads(f.attrs["study"]),
                 metadata=json.loads(f.attrs["metadata"]),
@@ -325,37 +460,94 @@ def fill_chunk(result: SweepResult, part: Chunk, prec: Precision) -> None:
         )
 
 
+#: Names the sweep file's layout takes for itself (a swept parameter may not take one).
+LAYOUT_NAMES = (
+    "time", "member", "monitor", "variable", "event", "drift", "final_state", "status",
+    "message", "steps", "events",
+)  # fmt: skip
+
+
 def _create(f: Any, result: SweepResult) -> None:
-    from ..core.result import string_dtype, write_array
+    """The sweep file's netCDF-4 layout (format 3): dimensions ``member``, ``time``,
+    ``monitor``, ``variable`` and ``event``; each swept parameter a coordinate over ``member``
+    (named by the data variables' CF ``coordinates`` attribute)."""
+    from ..core.result import label, string_dtype, write_array
 
     prec = result.precision
+    names = list(result.parameters)
+    if clash := sorted(set(LAYOUT_NAMES) & set(names)):
+        raise ValueError(
+            f"a swept parameter is named {', '.join(map(repr, clash))}, which the sweep file's "
+            "layout keeps for itself"
+        )
     f.attrs["format"] = FORMAT
     f.attrs["format_version"] = FORMAT_VERSION
+    f.attrs["Conventions"] = "CF-1.10"
+    f.attrs["title"] = str(result.study.get("title") or "")
+    f.attrs["source"] = source_line(result.metadata)
     f.attrs["precision"] = json.dumps(prec.to_spec())
     f.attrs["study"] = json.dumps(result.study)
     f.attrs["metadata"] = json.dumps(result.metadata)
     f.attrs["order"] = json.dumps(
         {
-            "parameters": list(result.parameters),
+            "parameters": names,
             "drift": list(result.drift),
             "events": list(result.events),
+            "final": list(result.final_names),
         }
     )
-    write_array(f, "t", result.t, prec)
-    g = f.create_group("parameters")
+    n = len(result.status)
+    scales = {
+        "time": write_array(f, "time", result.t, prec),
+        "member": f.create_dataset("member", data=np.arange(n, dtype=np.int64)),
+    }
+    for dim, values in (
+        ("monitor", result.drift),
+        ("variable", result.final_names),
+        ("event", result.events),
+    ):
+        scales[dim] = f.create_dataset(
+            dim, data=np.array(list(values), dtype=object), dtype=string_dtype()
+        )
+    for dim, ds in scales.items():
+        ds.make_scale(dim)
+    label(scales["time"], "time")
+    label(scales["member"], "member of the sweep")
+    coordinates = " ".join(names)
+
+    def over(ds: Any, dims: tuple[str, ...], long_name: str) -> None:
+        for axis, dim in enumerate(dims):
+            ds.dims[axis].attach_scale(scales[dim])
+        label(ds, long_name)
+        if "member" in dims and coordinates:
+            ds.attrs["coordinates"] = coordinates
+
     for name, column in result.parameters.items():
-        write_array(g, name, column, prec)
-    g = f.create_group("drift")
-    for name, d in result.drift.items():
-        g.create_dataset(name, data=d, dtype=np.float64)
-    write_array(f, "final_state", result.final_state, prec)
-    f["final_state"].attrs["names"] = json.dumps(list(result.final_names))
-    f.create_dataset("status", data=np.asarray(result.status, dtype=np.int8))
-    f.create_dataset("message", data=np.asarray(result.message, dtype=object), dtype=string_dtype())
-    f.create_dataset("steps", data=np.asarray(result.steps, dtype=np.int64))
-    g = f.create_group("events")
-    for name, c in result.events.items():
-        g.create_dataset(name, data=np.asarray(c, dtype=np.int64))
+        over(write_array(f, name, column, prec), ("member",), f"swept parameter {name}")
+    drift = np.stack([result.drift[k] for k in result.drift]) if result.drift else None
+    ds = f.create_dataset(
+        "drift",
+        data=drift if drift is not None else np.zeros((0, n, len(result.t))),
+        dtype=np.float64,
+    )
+    over(ds, ("monitor", "member", "time"), "relative drift of each conserved monitor")
+    ds = write_array(f, "final_state", result.final_state, prec)
+    over(ds, ("member", "variable"), "the variables at the last output time")
+    ds = f.create_dataset("status", data=np.asarray(result.status, dtype=np.int8))
+    over(ds, ("member",), "0 completed, -1 failed, -2 not run")
+    ds = f.create_dataset(
+        "message", data=np.asarray(result.message, dtype=object), dtype=string_dtype()
+    )
+    over(ds, ("member",), "why the member ended")
+    ds = f.create_dataset("steps", data=np.asarray(result.steps, dtype=np.int64))
+    over(ds, ("member",), "Taylor steps")
+    counts = np.stack([result.events[k] for k in result.events], axis=1) if result.events else None
+    ds = f.create_dataset(
+        "events",
+        data=counts if counts is not None else np.zeros((n, 0)),
+        dtype=np.int64,
+    )
+    over(ds, ("member", "event"), "occurrences of each recorded event")
 
 
 class Writer:
@@ -373,8 +565,9 @@ class Writer:
         self.staged = Staged(path)
         self.file = None
         try:
-            self.file = h5py.File(self.staged.tmp, "w")
+            self.file = h5py.File(self.staged.tmp, "w", track_order=True)
             _create(self.file, result)
+            self.order = json.loads(self.file.attrs["order"])
             self.file.flush()
         except BaseException as exc:
             self._abandon(exc)
@@ -405,10 +598,11 @@ class Writer:
         f["status"][rows] = np.asarray(part.status, dtype=np.int8)[order]
         f["message"][rows] = np.asarray(part.message, dtype=object)[order]
         f["steps"][rows] = np.asarray(part.steps)[order]
+        monitors, events = self.order["drift"], self.order["events"]
         for name, d in part.drift.items():
-            f["drift"][name][rows] = d[order]
+            f["drift"][monitors.index(name), rows, :] = d[order]
         for name, c in part.events.items():
-            f["events"][name][rows] = c[order]
+            f["events"][rows, events.index(name)] = c[order]
         final = part.final[order]
         f["final_state"][rows] = final if prec.kind == "double" else final.astype(object)
         f.flush()
@@ -418,6 +612,7 @@ class Writer:
             return
         try:
             self.file.attrs["metadata"] = json.dumps(metadata)
+            self.file.attrs["source"] = source_line(metadata)
             seal(self.file)
             self.file.close()
         except BaseException as exc:

@@ -1,0 +1,158 @@
+"""Labelled views of results for the scientific Python stack: xarray datasets, pandas tables.
+
+The views carry what the result files carry (format 3, :mod:`cayley_heyoka.core.result`): the
+dimension ``time``, ``component`` for vector monitors, each variable's ``long_name`` (its
+family's description) and ``units`` where the scene's ``output.units`` gives one, and the run's
+precision in the attributes.
+
+**Precision is never lost silently.** A double result gives float64 arrays. A quad or
+multiprecision result gives object arrays of its own numbers (heyoka ``real128`` or ``real``),
+exact, with ``attrs["precision"]`` saying which; ``as_double=True`` asks for the float64 view
+explicitly, and the view then says ``precision = "double"`` and ``rounded_from = "quad"`` (or
+``"real256"``, …). Neither xarray nor pandas is needed by the library itself: they are imported
+when a view is asked for (``pip install "cayley_heyoka[xarray]"``).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:  # only for annotations: the views import them when called
+    import pandas as pd
+    import xarray as xr
+
+#: What the views take: a :class:`~cayley_heyoka.core.result.Result` (not imported here, so
+#: that the result module may import this one).
+Result = Any
+
+#: Labels of the ``component`` dimension of three-vectors (space axes), as in the files.
+COMPONENTS = ("x", "y", "z")
+
+
+def require(module: str) -> Any:
+    """Import ``xarray`` or ``pandas``, or say how to install it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        raise ImportError(
+            f"labelled views of results need {module}: pip install 'cayley_heyoka[xarray]' "
+            f"(xarray, pandas and h5netcdf)"
+        ) from exc
+
+
+def values(arr: np.ndarray, precision: Any, as_double: bool) -> np.ndarray:
+    """``arr`` as the view holds it: float64 in double or when asked, else the exact numbers."""
+    if precision.kind == "double" or as_double:
+        return np.asarray(arr, dtype=np.float64)
+    return np.asarray(arr, dtype=object)
+
+
+def precision_attrs(precision: Any, as_double: bool) -> dict[str, str]:
+    """What the view's numbers are: ``precision``, and ``rounded_from`` for a double view of
+    an extended-precision result."""
+    if precision.kind != "double" and as_double:
+        return {"precision": "double", "rounded_from": precision.name}
+    return {"precision": precision.name}
+
+
+def component_dim(size: int) -> str:
+    """The dimension of a ``size``-vector's components, named as in the result files."""
+    return "component" if size == len(COMPONENTS) else f"component_{size}"
+
+
+def variable_attrs(result: Result, name: str, role: str) -> dict[str, str]:
+    attrs = {"role": role}
+    if text := result.describe(name):
+        attrs["long_name"] = text
+    if unit := result.unit(name):
+        attrs["units"] = unit
+    return attrs
+
+
+def time_attrs(result: Result) -> dict[str, str]:
+    attrs = {"long_name": "time"}
+    if unit := result.unit("time"):
+        attrs["units"] = unit
+    return attrs
+
+
+def result_dataset(result: Result, *, as_double: bool = False) -> xr.Dataset:
+    """:meth:`Result.to_xarray`: every variable and monitor over ``time``."""
+    xr = require("xarray")
+    prec = result.precision
+    coords: dict[str, Any] = {
+        "time": ("time", values(result.t, prec, as_double), time_attrs(result))
+    }
+    data: dict[str, Any] = {}
+    for role, arrays in (("variable", result.variables), ("monitor", result.monitors)):
+        for name, arr in arrays.items():
+            dims: tuple[str, ...] = ("time",)
+            if arr.ndim > 1:
+                dim = component_dim(arr.shape[1])
+                dims = ("time", dim)
+                if dim == "component":
+                    coords["component"] = ("component", list(COMPONENTS))
+            data[name] = (dims, values(arr, prec, as_double), variable_attrs(result, name, role))
+    attrs = {
+        "title": str(result.scene.get("title") or ""),
+        **precision_attrs(prec, as_double),
+        "status": int(result.status),
+        "success": int(result.success),
+        "message": result.message,
+        "conserved": list(result.conserved),
+        "counters": json.dumps(result.counters),
+        "scene": json.dumps(result.scene),
+        "events": list(result.events),
+    }
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def result_frame(result: Result, *, as_double: bool = False) -> pd.DataFrame:
+    """``Result.to_pandas("outputs")``: one row per output time, one column per variable and
+    monitor (a vector monitor's components as ``NAME_x``, ``NAME_y``, ``NAME_z``)."""
+    pd = require("pandas")
+    prec = result.precision
+    columns: dict[str, np.ndarray] = {}
+    for arrays in (result.variables, result.monitors):
+        for name, arr in arrays.items():
+            v = values(arr, prec, as_double)
+            if v.ndim > 1:
+                labels = COMPONENTS if v.shape[1] == len(COMPONENTS) else range(v.shape[1])
+                for i, label in enumerate(labels):
+                    columns[f"{name}_{label}"] = v[:, i]
+            else:
+                columns[name] = v
+    index = pd.Index(values(result.t, prec, as_double), name="time")
+    frame = pd.DataFrame(columns, index=index)
+    frame.attrs.update(precision_attrs(prec, as_double))
+    return frame
+
+
+def events_frame(result: Result, *, as_double: bool = False) -> pd.DataFrame:
+    """``Result.to_pandas("events")``: one row per event occurrence, in time order, with
+    columns ``event``, ``time``, ``direction`` (+1 up, −1 down) and ``label``."""
+    pd = require("pandas")
+    prec = result.precision
+    rows = []
+    for name, log in result.events.items():
+        times = values(log.time, prec, as_double)
+        for when, direction, label in zip(times, log.direction, log.label, strict=True):
+            rows.append((name, when, int(direction), str(label)))
+    rows.sort(key=lambda row: float(row[1]))
+    frame = pd.DataFrame(rows, columns=["event", "time", "direction", "label"])
+    if not rows:  # an empty frame of the same shape, numbers typed
+        frame = frame.astype({"direction": "int64"})
+    frame.attrs.update(precision_attrs(prec, as_double))
+    return frame
+
+
+def choose(table: str, tables: dict[str, Any]) -> Any:
+    """The builder of ``table``, or a ValueError naming the tables there are."""
+    if table not in tables:
+        raise ValueError(f"table must be one of {', '.join(map(repr, tables))}, got {table!r}")
+    return tables[table]
