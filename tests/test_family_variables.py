@@ -71,3 +71,12 @@ def test_info_lists_them(tmp_path, capsys):
     assert main(["info", "--variables", str(out)]) == 0
     text = capsys.readouterr().out
     assert "eta1" in text and "coordinate η1" in text and "the Hamiltonian H" in text
+
+
+def test_info_lists_a_sweeps_and_says_a_check_file_has_none(capsys):
+    data = Path(__file__).resolve().parent / "data" / "files"
+    assert main(["info", "--variables", str(data / "sweep_v2.h5")]) == 0
+    text = capsys.readouterr().out
+    assert "momentum_squared" in text and "angular momentum" in text and "Euler's p" in text
+    assert main(["info", "--variables", str(data / "check_v1.h5")]) == 0
+    assert "a check file has rows of quantities, not variables" in capsys.readouterr().out

@@ -19,7 +19,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument(
         "--variables",
         action="store_true",
-        help="also say what each output and monitor of a result file is",
+        help="also say what each output and monitor of a result or sweep file is",
     )
     p.set_defaults(handler=command)
 
@@ -34,11 +34,19 @@ def command(args: argparse.Namespace) -> int:
         if kind == "sweep":
             from ..workflows.sweep_result import SweepResult
 
-            text = SweepResult.load(path).summary()
+            sweep = SweepResult.load(path)
+            text = sweep.summary()
+            if args.variables:
+                from .show import variable_lines
+
+                names = (*sweep.final_names, *sweep.drift)
+                text += "\n" + "\n".join(variable_lines(sweep.study["scene"], names))
         elif kind == "check":
             from ..core.consistency import CheckReport
 
             text = CheckReport.load(path).text()
+            if args.variables:
+                text += "\n  variables     (a check file has rows of quantities, not variables)"
         else:  # a result, or whatever it is: the loader says what is wrong with it
             from ..core.result import Result
             from .show import summary, variable_lines
@@ -46,7 +54,8 @@ def command(args: argparse.Namespace) -> int:
             result = Result.load(path)
             text = summary(result)
             if args.variables:
-                text += "\n" + "\n".join(variable_lines(result))
+                names = (*result.variables, *result.monitors)
+                text += "\n" + "\n".join(variable_lines(result.scene, names))
     except ResultFileError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -89,19 +90,19 @@ def summary(result: Result) -> str:
     return "\n".join(lines)
 
 
-def variable_lines(result: Result) -> list[str]:
-    """What each variable and monitor of ``result`` is, in its family's words
-    (``Family.variables``; the family's record loads without heyoka)."""
+def variable_lines(scene: dict[str, Any], names: Iterable[str]) -> list[str]:
+    """What each of ``names`` (a result's variables and monitors, a sweep's) is in
+    ``scene``'s family's words (``Family.variables``; the record loads without heyoka)."""
     from ..core.errors import SceneError
     from ..core.families import FAMILIES, family_of
 
     try:
-        family = FAMILIES[family_of(result.scene)]
+        family = FAMILIES[family_of(scene)]
     except SceneError as exc:  # a family of another package, not installed here
         return [f"  variables     not described: {exc.constraint}"]
     lines = ["  variables     what each output and monitor is:"]
-    for name in (*result.variables, *result.monitors):
-        text = family.variables(result.scene, name) if family.variables is not None else None
+    for name in names:
+        text = family.variables(scene, name) if family.variables is not None else None
         lines.append(
             f"    {name:<20} {text or '(not described by the ' + family.name + ' family)'}"
         )
