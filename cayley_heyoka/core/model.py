@@ -18,13 +18,13 @@ import pickle
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from typing import Any, TypeAlias
 
 import heyoka as hy
 
 from .precision import Number, Precision
 
-Expr = hy.expression
+Expr: TypeAlias = hy.expression
 
 
 class ParTable:
