@@ -165,7 +165,8 @@ def _parse(source: str, text: str, field: str) -> ast.Expression:
         tree = ast.parse(source.strip(), mode="eval")
     except SyntaxError as exc:
         raise SceneError(field, f"not a valid expression ({exc.msg}): {_short(text)}") from None
-    depth, stack = 0, [(tree.body, 1)]
+    depth = 0
+    stack: list[tuple[ast.AST, int]] = [(tree.body, 1)]
     while stack:
         node, level = stack.pop()
         while isinstance(node, ast.BinOp) and isinstance(node.op, _CHAINED):

@@ -113,7 +113,7 @@ class Result:
             if d.size:
                 drifts[name] = float(np.nanmax(d))
         if drifts:
-            name = max(drifts, key=drifts.get)
+            name = max(drifts, key=drifts.__getitem__)
             worst = f", worst drift {name} {drifts[name]:.1e}"
         steps = self.counters.get("steps")
         stepped = f", {steps} steps" if steps is not None else ""

@@ -124,7 +124,8 @@ class Watch:
                     target=self._serve, name="cayley_heyoka-propagation", daemon=True
                 )
                 self._thread.start()
-        done, box = threading.Event(), {}
+        done = threading.Event()
+        box: dict[str, BaseException] = {}
         self._jobs.put((job, done, box))
         try:
             while not done.wait(0.25):
