@@ -164,9 +164,10 @@ def evaluate(
     left = sum(len(chunks[i]) for i in todo)
     workers = min(workers, len(todo), max(1, left // (PARALLEL_FROM // 2)))
     if workers <= 1 or left < PARALLEL_FROM:
-        at = job.evaluator() if todo else None
-        for i in todo:
-            finished(i, [at(t) for t in chunks[i]])
+        if todo:
+            at = job.evaluator()
+            for i in todo:
+                finished(i, [at(t) for t in chunks[i]])
         extra = meanwhile() if meanwhile else None
     else:
         pool = multiprocessing.get_context("spawn").Pool(

@@ -213,14 +213,19 @@ class OutputOptions:
     @property
     def count(self) -> int:
         """The number of output times."""
-        return len(self.times) if self.times is not None else self.grid[2]
+        return len(self.times) if self.times is not None else self._grid()[2]
 
     def span(self) -> tuple[Number, Number]:
         """The first and last output times, as written."""
         if self.times is not None:
             return self.times[0], self.times[-1]
-        start, stop, count = self.grid
+        start, stop, count = self._grid()
         return start, stop if count > 1 else start
+
+    def _grid(self) -> tuple[Number, Number, int]:
+        """The grid, when the times are not a list (:meth:`parse` sets exactly one of them)."""
+        assert self.grid is not None, "output options with neither times nor a grid"
+        return self.grid
 
     def time_grid(self, precision: Precision) -> np.ndarray:
         """The output times in the target precision (a grid is built there, not in double).
@@ -233,10 +238,10 @@ class OutputOptions:
         """
         if self.times is not None:
             grid = precision.array(self.times)
-        elif self.grid[2] == 1:
-            grid = precision.array([self.grid[0]])
+        elif self._grid()[2] == 1:
+            grid = precision.array([self._grid()[0]])
         else:
-            start, stop, count = self.grid
+            start, stop, count = self._grid()
             a, b = precision.number(start), precision.number(stop)
             n = precision.number(count - 1)
             if precision.kind == "double":
