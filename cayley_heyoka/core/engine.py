@@ -320,7 +320,7 @@ class Propagation:
             # (heyoka starts each call with a step to its first point, and the double-length
             # time is not a grid point), so a signal ends the call after a whole step: by
             # poisoning the parameters (Watch), or else by a callback after each step.
-            callback = self._callback
+            callback: Callable[[Any], bool] | None = self._callback
             if callback is None and self._signals.active and not self._poisoning:
                 callback = self._signals.callback
             probe = self._probes[0] if self._probes else None
@@ -527,6 +527,8 @@ class Propagation:
             raise ValueError("the snapshot is of a scene with other events")
         for spec, value in zip(self.terminal, snapshot["handlers"], strict=True):
             if value is not None:
+                if not hasattr(spec.handle, "resume"):
+                    raise ValueError("the snapshot is of a scene with other event handlers")
                 spec.handle.resume(value)
         for ev, (times, directions) in zip(recorded, snapshot["events"], strict=True):
             ev.callback.times = list(prec.from_text(times))
@@ -539,6 +541,8 @@ class Propagation:
             width = (len(model.system), len(model.pars))
             states = np.concatenate(self._states) if self._states else np.empty((0, width[0]))
             pars = np.concatenate(self._pars_rows) if self._pars_rows else np.empty((0, width[1]))
+        elif pars is None:
+            raise ValueError("result(states, pars): the rows' parameters go with their states")
         times = self.grid[: len(states)]
         values = evaluate_outputs(self.compiled, model, states, pars, times, prec)
         if self.status == 0 and (bad := first_nonfinite(model, values, times)) is not None:
