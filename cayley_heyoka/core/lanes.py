@@ -245,8 +245,9 @@ def propagate_members(
     """
     compiled, _ = compile_batch(model, options)
     members = len(initial)
-    if terminal is None:
-        terminal = _Shared(model.terminal)
+    handlers: Sequence[Sequence[TerminalSpec]] | _Shared = (
+        _Shared(model.terminal) if terminal is None else terminal
+    )
     results = _Finals(members, len(model.system)) if final_only else _Everything(members, model)
     starts = iter(range(0, members, compiled.width))
     lock = threading.Lock()
@@ -264,7 +265,7 @@ def propagate_members(
             cancel.watch(poison)
         try:
             lanes = _Lanes(ta, compiled.width, model, options, grid, next_block, results, cancel)
-            lanes.run(initial, pars, terminal)
+            lanes.run(initial, pars, handlers)
         finally:
             if isinstance(cancel, Cancel):
                 cancel.unwatch(poison)
@@ -553,7 +554,7 @@ class _Lanes:
         last = len(self.grid) - 1
         while (m := self.lanes[j]) is not None:
             if m.status != 0 or m.done > last:
-                self._finish(j)
+                self._finish(j, m)
                 continue
             if m.done == last and self.ta.time[j] == self.grid[last]:
                 self._keep(m, self.ta.state[:, j].copy()[None, :])
@@ -571,11 +572,12 @@ class _Lanes:
 
     def _step(self) -> None:
         ta, width = self.ta, self.width
-        busy = [j for j in range(width) if self.lanes[j] is not None]
-        columns = {j: self._column(j, self.lanes[j]) for j in busy}
-        for j in busy:
+        members = {j: m for j in range(width) if (m := self.lanes[j]) is not None}
+        busy = list(members)
+        columns = {j: self._column(j, m) for j, m in members.items()}
+        for j, m in members.items():
             points, lead = columns[j]
-            self.lanes[j].rows, self.lanes[j].rows_pars = points[lead:], []
+            m.rows, m.rows_pars = points[lead:], []
         length = max(len(c) for c, _ in columns.values())
         # Idle lanes follow a busy one (a copy of its time, state, parameters and handlers).
         source = busy[0]
@@ -588,13 +590,13 @@ class _Lanes:
                 if ta.with_events:
                     ta.reset_cooldowns(j)
                 if self.model.terminal:
-                    self.twins[j] = self._twin(self.lanes[source])
+                    self.twins[j] = self._twin(members[source])
                 columns[j] = columns[source]
         ta.set_dtime(hi, lo)
         table = np.empty((length, width))
         for j in range(width):
             table[:, j] = _padded(columns[j][0], length)
-        left = min(self.budget - self.lanes[j].steps for j in busy)
+        left = min(self.budget - m.steps for m in members.values())
         if self._cancelled():
             return
         out = ta.propagate_grid(table, max_steps=left, **self.limit)[-1]
@@ -612,6 +614,8 @@ class _Lanes:
         """Record lane ``j``'s rows of the call and act on its outcome, as
         :meth:`cayley_heyoka.core.engine.Propagation._propagate` does on a scalar integrator."""
         ta, m = self.ta, self.lanes[j]
+        if m is None:
+            raise RuntimeError(f"lane {j} has no member to collect")
         points, lead = column
         outcome, steps = res[0], int(res[3])
         t = ta.time[j]
@@ -695,8 +699,8 @@ class _Lanes:
             "results kept up to there (raise integrator.max_steps to go on)"
         )
 
-    def _finish(self, j: int) -> None:
-        m = self.lanes[j]
+    def _finish(self, j: int, m: _Member) -> None:
+        """Hand lane ``j``'s member ``m`` to the results; the lane takes the next one."""
         self.results.put(m.index, self._result(m))
         self._assign(j)
 
