@@ -54,8 +54,13 @@ def pyplot_figure(size: tuple[float, float]) -> Figure:
 
 def beside_3d(fig: Figure, rows: int, width: float) -> GridSpec:
     """A grid for a 3-D axes spanning column 0 and ``rows`` panels in column 1."""
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
     # Constrained layout does not see a 3-D axes' z label: widen the gap so it stays clear.
-    fig.get_layout_engine().set(wspace=0.08)
+    engine = fig.get_layout_engine()
+    if not isinstance(engine, ConstrainedLayoutEngine):
+        raise ValueError(f"beside_3d needs a figure with constrained layout, not {engine!r}")
+    engine.set(wspace=0.08)
     return fig.add_gridspec(rows, 2, width_ratios=(width, 1))
 
 
