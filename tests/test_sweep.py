@@ -146,6 +146,13 @@ def test_random_members_are_reproducible_and_follow_their_distributions():
         ),
         ({"kind": "random", "count": 5}, "sweep.seed", "is required"),
         ({"kind": "random", "count": 0, "seed": 1}, "sweep.count", "integer >= 1"),
+        # None (a study given as Python dictionaries) is no count: it was a TypeError later.
+        ({"kind": "random", "count": None, "seed": 1}, "sweep.count", "integer >= 1"),
+        (
+            {"params": {"initial.rates[0]": {"start": 0, "stop": 1, "count": None}}},
+            '"initial.rates[0]".count',
+            "integer >= 1",
+        ),
         (
             {"kind": "random", "count": 5, "seed": 1, "params": {"initial.rates[0]": [1, 2]}},
             '"initial.rates[0]"',

@@ -182,7 +182,7 @@ class Study:
             for key in ("count", "seed"):
                 if key not in sweep:
                     raise SceneError(f"sweep.{key}", "is required for kind = 'random'")
-            count = _count(sweep["count"], "sweep.count", MAX_MEMBERS)
+            count = _required_count(sweep["count"], "sweep.count", MAX_MEMBERS)
             seed = sweep["seed"]
             if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
                 raise SceneError("sweep.seed", f"must be an integer >= 0, got {seed!r}")
@@ -288,6 +288,14 @@ def _count(value: Any, where: str, most: int | None = None) -> int | None:
     return value
 
 
+def _required_count(value: Any, where: str, most: int) -> int:
+    """A count that must be given (:func:`_count` takes None for an optional one)."""
+    count = _count(value, where, most)
+    if count is None:
+        raise SceneError(where, f"must be an integer >= 1, got {value!r}")
+    return count
+
+
 def _base_scene(spec: Any, base_dir: str | Path | None) -> tuple[dict[str, Any], str | None]:
     if spec is None:
         raise SceneError(
@@ -367,7 +375,7 @@ def _grid_values(spec: Mapping[str, Any], where: str, prec: Precision) -> tuple[
         raise SceneError(where, f"a grid needs start, stop and count; missing {missing}")
     start = number(spec["start"], f"{where}.start")
     stop = number(spec["stop"], f"{where}.stop")
-    count = _count(spec["count"], f"{where}.count", MAX_MEMBERS)
+    count = _required_count(spec["count"], f"{where}.count", MAX_MEMBERS)
     spacing = spec.get("spacing", "linear")
     if spacing not in ("linear", "log"):
         raise SceneError(f"{where}.spacing", f"must be 'linear' or 'log', got {spacing!r}")
