@@ -1,12 +1,15 @@
-"""Short, useful ``repr`` of scenes, results and sweeps (one line: what, span, how it ended)."""
+"""Short, useful ``repr`` of scenes, results, sweeps (one line: what, span, how it ended) and of
+the closed-form references (the body, its constants, the precision; a state's values and error)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import mpmath
 import pytest
 
 import cayley_heyoka as ch
+from cayley_heyoka import reference
 from cayley_heyoka.workflows.study import load_study
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -42,3 +45,50 @@ def test_sweep_repr(tmp_path):
     text = repr(sweep)
     assert text.startswith("<SweepResult ") and "members over" in text and "completed" in text
     assert "\n" not in text and len(text) < 300
+
+
+# -- the closed-form references ---------------------------------------------------------------
+def _one_short_line(text: str, name: str) -> None:
+    assert text.startswith(f"<{name} ") and text.endswith(">"), text
+    assert "\n" not in text and len(text) <= 200, text
+
+
+def _six(*values) -> str:
+    """Values as the reprs print them: six significant digits, mpmath.nstr, comma-separated."""
+    return ", ".join(mpmath.nstr(x, 6) for x in values)
+
+
+def test_free_rigid_body_repr_says_the_body_its_constants_and_the_precision():
+    body = reference.FreeRigidBody(("1", "2", "3"), ("0.25", "-0.15", "1.2"), dps=20)
+    text = repr(body)
+    _one_short_line(text, "FreeRigidBody")
+    assert "asymmetric, A, B, C = 1.0, 2.0, 3.0:" in text and text.endswith(", dps 20>")
+    assert f"h = {_six(body.h)}, k = {_six(body.k)}, period {_six(body.period)}" in text
+    assert f"separatrix distance {_six(body.separatrix_distance)}" in text
+    # A symmetric body has no separatrix, a steady rotation no period: neither is printed.
+    symmetric = repr(reference.FreeRigidBody(("1", "1", "1.5"), ("1", "1", "1"), dps=20))
+    steady = repr(reference.FreeRigidBody(("1", "2", "3"), ("0", "0", "1.5"), dps=20))
+    assert "separatrix" not in symmetric and "period" in symmetric
+    assert "period" not in steady and "separatrix" in steady
+    # Beyond double's range the values print as they are, not as inf.
+    huge = reference.FreeRigidBody(("1e300", "2e300", "3e300"), ("1e200", "0", "1e100"), dps=20)
+    assert "h = 1.0e+700, k = 1.0e+500" in repr(huge)
+
+
+def test_free_body_state_repr_says_time_rates_angles_and_worst_error():
+    body = reference.FreeRigidBody(("1", "2", "3"), ("0.25", "-0.15", "1.2"), dps=20)
+    state = body.at("7.5")
+    text = repr(state)
+    _one_short_line(text, "FreeBodyState")
+    assert f"t = 7.5: p, q, r = {_six(state.p, state.q, state.r)}" in text
+    assert f"φ = {_six(state.phi)}, Ψ = {_six(state.psi)}" in text
+    assert text.endswith(f"error {mpmath.nstr(state.error, 2)}>")
+
+
+def test_crossing_repr_says_axis_time_direction_and_error():
+    body = reference.FreeRigidBody(("1", "2", "3"), ("0.25", "-0.15", "1.2"), dps=20)
+    crossing = body.crossing_times("x1", "0", "5")[0]
+    text = repr(crossing)
+    _one_short_line(text, "Crossing")
+    assert f"x1 at t = {_six(crossing.time)}, direction {crossing.direction:+d}" in text
+    assert text.endswith(f"error {mpmath.nstr(crossing.error, 2)}>")

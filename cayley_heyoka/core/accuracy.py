@@ -18,7 +18,15 @@ from dataclasses import dataclass
 
 import mpmath
 
-__all__ = ["Certified", "PrecisionNotReached", "certify", "scaled_difference", "to_mpf"]
+__all__ = [
+    "Certified",
+    "PrecisionNotReached",
+    "certify",
+    "scaled_difference",
+    "shown",
+    "shown_error",
+    "to_mpf",
+]
 
 
 class PrecisionNotReached(ArithmeticError):
@@ -83,6 +91,20 @@ def scaled_difference(a: mpmath.mpf, b: mpmath.mpf) -> mpmath.mpf:
     if a == b:  # also for infinite values (a steady rotation's period)
         return mpmath.mpf(0)
     return abs(a - b) / max(mpmath.mpf(1), abs(b))
+
+
+def shown(*values: mpmath.mpf, digits: int = 6) -> str:
+    """Values to ``digits`` significant digits, comma-separated, for a one-line ``repr``.
+
+    ``mpmath.nstr`` and never ``float``: a reference value may lie beyond double's range, and
+    the repr must not turn it into ``inf`` or ``0.0``.
+    """
+    return ", ".join(mpmath.nstr(x, digits) for x in values)
+
+
+def shown_error(error: mpmath.mpf) -> str:
+    """An error estimate to two significant digits (its order of magnitude is what matters)."""
+    return mpmath.nstr(error, 2)
 
 
 def certify(

@@ -33,7 +33,7 @@ from typing import Literal
 
 import mpmath
 
-from ..core.accuracy import Certified, certify, to_mpf
+from ..core.accuracy import Certified, certify, shown, shown_error, to_mpf
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from .attitude import (
     quaternion_multiply,
@@ -48,7 +48,7 @@ AXES = ("x1", "y1", "z1")
 _SINGULAR_FIELDS = ("nu0", "lambda0", "mu0")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Crossing:
     """A principal axis crossing the invariable plane.
 
@@ -61,8 +61,15 @@ class Crossing:
     axis: str
     error: mpmath.mpf
 
+    def __repr__(self) -> str:
+        """One line: the axis, the time, the direction, the error estimate."""
+        return (
+            f"<Crossing {self.axis} at t = {shown(self.time)}, direction {self.direction:+d}, "
+            f"error {shown_error(self.error)}>"
+        )
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, repr=False)
 class FreeBodyState:
     """The free body at one time, in the conventions of docs/reference.md.
 
@@ -106,6 +113,14 @@ class FreeBodyState:
         while the quaternions carry the same attitude regularly.
         """
         return max(v for k, v in self.errors.items() if k not in _SINGULAR_FIELDS)
+
+    def __repr__(self) -> str:
+        """One line: the time, the body rates, φ and Ψ, the worst error estimate (:attr:`error`:
+        λ₀, μ₀, ν₀ would report a half-turn's infinity, not a loss of digits)."""
+        return (
+            f"<FreeBodyState t = {shown(self.t)}: p, q, r = {shown(*self.rates)}, "
+            f"φ = {shown(self.phi)}, Ψ = {shown(self.psi)}, error {shown_error(self.error)}>"
+        )
 
     @property
     def rates(self) -> tuple[mpmath.mpf, mpmath.mpf, mpmath.mpf]:
@@ -202,6 +217,24 @@ class FreeRigidBody:
         self.separatrix_distance = v["separatrix_distance"]
         self.momentum_space = (v["g"], v["g1"], v["g2"])
         self.constant_errors = summary.errors
+        # Kept for the repr only: (A, B, C) as read, in the caller's order.
+        self._moments = probe.I
+
+    def __repr__(self) -> str:
+        """One line: the body, Cayley's constants h and k, the period of p, q, r, the distance
+        from the separatrix (three distinct moments only) and the precision.
+
+        Only what construction read and certified is shown: a repr evaluates nothing.
+        """
+        said = [f"h = {shown(self.h)}", f"k = {shown(self.k)}"]
+        if mpmath.isfinite(self.period):
+            said.append(f"period {shown(self.period)}")
+        if len(set(self._moments)) == 3:
+            said.append(f"separatrix distance {shown(self.separatrix_distance)}")
+        return (
+            f"<FreeRigidBody {self.kind}, A, B, C = {shown(*self._moments)}: {', '.join(said)}, "
+            f"dps {self.dps}>"
+        )
 
     # -- plumbing -------------------------------------------------------------------------------
     def _constants(self, wdps: int) -> Constants:
