@@ -92,3 +92,64 @@ def test_crossing_repr_says_axis_time_direction_and_error():
     _one_short_line(text, "Crossing")
     assert f"x1 at t = {_six(crossing.time)}, direction {crossing.direction:+d}" in text
     assert text.endswith(f"error {mpmath.nstr(crossing.error, 2)}>")
+
+
+@pytest.fixture(scope="module")
+def euler():
+    return reference.Euler1758(
+        ("1", "2", "3"), ("0.25", "-0.15", "1.2"), ("0.48", "0.6", "0.64"), dps=20
+    )
+
+
+@pytest.fixture(scope="module")
+def cayley():
+    return reference.Cayley1846(
+        ("1", "2", "3"), ("0.25", "-0.15", "1.2"), ("0.1", "0.2", "-0.3"), dps=20
+    )
+
+
+def test_euler1758_repr_says_the_body_p_its_constants_and_the_precision(euler):
+    text = repr(euler)
+    _one_short_line(text, "Euler1758")
+    assert "A, B, C = 1.0, 2.0, 3.0, P = (0.48, 0.6, 0.64):" in text
+    assert text.endswith(", dps 20>")
+    # Euler's F = 2T and G = |L|², from the body rates at t = 0.
+    assert f"F = {_six(mpmath.mpf('4.4275'))}, G = {_six(mpmath.mpf('13.1125'))}" in text
+    assert f"period {_six(euler.period)}" in text
+    body = reference.FreeRigidBody(("1", "2", "3"), ("0.25", "-0.15", "1.2"), dps=20)
+    assert f"separatrix distance {_six(body.separatrix_distance)}" in text
+    symmetric = reference.Euler1758(("1", "1", "2"), ("0.3", "0.4", "1"), ("0.6", "0", "0.8"))
+    assert "separatrix" not in repr(symmetric)
+
+
+def test_euler_state_repr_says_time_rates_angles_and_worst_error(euler):
+    state = euler.at("7.5")
+    text = repr(state)
+    _one_short_line(text, "EulerState")
+    assert f"t = 7.5: p, q, r = {_six(state.p, state.q, state.r)}" in text
+    assert f"U = {_six(state.U)}, φ + 𝔉 = {_six(state.phi_plus_F)}" in text
+    assert text.endswith(f"error {mpmath.nstr(state.error, 2)}>")
+
+
+def test_cayley1846_repr_says_the_body_its_constants_and_the_precision(cayley, euler):
+    text = repr(cayley)
+    _one_short_line(text, "Cayley1846")
+    assert "A, B, C = 1.0, 2.0, 3.0:" in text and text.endswith(", dps 20>")
+    assert f"h = {_six(cayley.h)}, k = {_six(cayley.k)}" in text
+    assert f"a, b, c = {_six(cayley.a, cayley.b, cayley.c)}" in text
+    assert f"period {_six(euler.period)}" in text  # the same body and rates
+
+
+def test_cayley1846_state_and_quadratures_repr(cayley):
+    state = cayley.at("7.5")
+    text = repr(state)
+    _one_short_line(text, "Cayley1846State")
+    assert f"t = 7.5: p, q, r = {_six(state.p, state.q, state.r)}" in text
+    assert f"υ = {_six(state.upsilon)}, 2 tan⁻¹(Ω/k) = {_six(state.angle)}" in text
+    assert text.endswith(f"error {mpmath.nstr(state.error, 2)}>")
+    quadratures = cayley.quadratures_in_upsilon("2")
+    text = repr(quadratures)
+    _one_short_line(text, "UpsilonQuadratures")
+    assert f"t = {_six(quadratures.t)}, angle increment {_six(quadratures.angle_increment)}" in text
+    assert f"{quadratures.turning_points} turning point" in text
+    assert text.endswith(f"error {mpmath.nstr(quadratures.error, 2)}>")

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import mpmath
 
-from ..core.accuracy import PrecisionNotReached, certify, to_mpf
+from ..core.accuracy import PrecisionNotReached, certify, shown, shown_error, to_mpf
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from ..core.vectors import cross, dot
 from .attitude import matvec, rodrigues_to_matrix
@@ -44,6 +44,7 @@ from .euler1758 import (
     RegularisedRates,
     ThetaPoint,
     quarter_sin_cos,
+    separatrix_distance,
     theta_at_time,
 )
 
@@ -53,7 +54,7 @@ _STATE_FIELDS = ("p", "q", "r", "upsilon", "omega_over_k", "angle", "kappa", "la
 _QUATERNION = ("quaternion_w", "quaternion_x", "quaternion_y", "quaternion_z")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Cayley1846State:
     """Cayley's solution at one time, in the conventions of docs/reference.md.
 
@@ -98,13 +99,22 @@ class Cayley1846State:
         """The worst error estimate of the state."""
         return max(self.errors.values())
 
+    def __repr__(self) -> str:
+        """One line: the time, the body rates, υ, Cayley's angle 2 tan⁻¹(Ω/k), the worst error
+        (λ, μ, ν are left to the attributes: infinite at a half-turn, they say little here)."""
+        return (
+            f"<Cayley1846State t = {shown(self.t)}: p, q, r = {shown(self.p, self.q, self.r)}, "
+            f"υ = {shown(self.upsilon)}, 2 tan⁻¹(Ω/k) = {shown(self.angle)}, "
+            f"error {shown_error(self.error)}>"
+        )
+
     @property
     def rodrigues(self) -> tuple[mpmath.mpf, mpmath.mpf, mpmath.mpf]:
         """(λ, μ, ν)."""
         return (self.lambda_, self.mu, self.nu)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class UpsilonQuadratures:
     """Cayley's quadratures (27), (28) in υ taken along the motion from 0 to t.
 
@@ -128,6 +138,15 @@ class UpsilonQuadratures:
     @property
     def error(self) -> mpmath.mpf:
         return max(self.errors.values())
+
+    def __repr__(self) -> str:
+        """One line: the recovered t, the angle's increment, the turning points, the worst error."""
+        return (
+            f"<UpsilonQuadratures t = {shown(self.t)}, angle increment "
+            f"{shown(self.angle_increment)}, {self.turning_points} turning "
+            f"point{'' if self.turning_points == 1 else 's'}, "
+            f"error {shown_error(self.error)}>"
+        )
 
 
 class _CayleyConstants:
@@ -297,6 +316,25 @@ class Cayley1846:
             self.constants(self.dps + GUARD)  # validates the input
         values = certify(self._integrals, self.dps, guard=GUARD).values
         self.a, self.b, self.c, self.h, self.k = (values[n] for n in ("a", "b", "c", "h", "k"))
+
+    def __repr__(self) -> str:
+        """One line: the body, Cayley's constants h, k and (a, b, c), the period of p, q, r, the
+        distance from the separatrix (three distinct moments only), the precision.
+
+        h, k, a, b, c are certified at construction; the inertia and the period are read from the
+        constants built then (``dps + GUARD`` digits): a repr runs no quadrature.
+        """
+        k = self.constants(self.dps + GUARD)
+        with mpmath.workdps(self.dps + GUARD):
+            period = 4 * k.motion.quarter_period
+            distance = separatrix_distance(k.inertia, self.h, self.k * self.k)
+        said = (
+            f"h = {shown(self.h)}, k = {shown(self.k)}, a, b, c = "
+            f"{shown(self.a, self.b, self.c)}, period {shown(period)}"
+        )
+        if distance is not None:
+            said += f", separatrix distance {shown(distance)}"
+        return f"<Cayley1846 A, B, C = {shown(*k.inertia)}: {said}, dps {self.dps}>"
 
     def _integrals(self, dps: int) -> dict[str, mpmath.mpf]:
         k = self.constants(dps)

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import mpmath
 
-from ..core.accuracy import PrecisionNotReached, certify, to_mpf
+from ..core.accuracy import PrecisionNotReached, certify, shown, shown_error, to_mpf
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from ..core.vectors import cross
 
@@ -47,6 +47,7 @@ __all__ = [
     "RegularisedRates",
     "ThetaPoint",
     "quarter_sin_cos",
+    "separatrix_distance",
     "theta_at_time",
 ]
 
@@ -355,8 +356,22 @@ def theta_at_time(
     return motion_at(dps).theta_at(t, guess)
 
 
+def separatrix_distance(
+    inertia: Sequence[mpmath.mpf], twice_energy: mpmath.mpf, momentum_squared: mpmath.mpf
+) -> mpmath.mpf | None:
+    """(2T·B_mid − |L|²)/|L|², as :class:`~.closed_form.FreeRigidBody` defines it; None unless
+    the three moments are distinct (a symmetric body has no separatrix).
+
+    Evaluate it at working precision: next to the separatrix the difference cancels.
+    """
+    if len(set(inertia)) < 3:
+        return None
+    middle = sorted(inertia)[1]
+    return (middle * twice_energy - momentum_squared) / momentum_squared
+
+
 # -- Euler's solution ------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class EulerState:
     """Euler's solution at one time, in the conventions of docs/reference.md.
 
@@ -395,6 +410,14 @@ class EulerState:
     def error(self) -> mpmath.mpf:
         """The worst error estimate of the state."""
         return max(self.errors.values())
+
+    def __repr__(self) -> str:
+        """One line: the time, the body rates, Euler's angles U and φ + 𝔉, the worst error."""
+        return (
+            f"<EulerState t = {shown(self.t)}: p, q, r = {shown(self.p, self.q, self.r)}, "
+            f"U = {shown(self.U)}, φ + 𝔉 = {shown(self.phi_plus_F)}, "
+            f"error {shown_error(self.error)}>"
+        )
 
 
 _EULER_FIELDS = ("p", "q", "r", "u", "v", "U", "cos_l", "cos_m", "cos_n", "phi_plus_F")
@@ -614,6 +637,26 @@ class Euler1758:
         self._constants: dict[int, _EulerConstants] = {}
         with mpmath.workdps(self.dps + GUARD):
             self.constants(self.dps + GUARD)  # validates the input
+
+    def __repr__(self) -> str:
+        """One line: the body, P, Euler's constants F (= 2T) and G (= |L|²), the period of
+        p, q, r, the distance from the separatrix (three distinct moments only), the precision.
+
+        Read from the constants built at construction (``dps + GUARD`` digits, far more than the
+        six shown): a repr runs no quadrature and certifies nothing.
+        """
+        k = self.constants(self.dps + GUARD)
+        with mpmath.workdps(self.dps + GUARD):
+            direction = read_triple(self._inputs[2], "direction")
+            period = 4 * k.motion.quarter_period
+            distance = separatrix_distance(k.inertia, k.F, k.G)
+        said = f"F = {shown(k.F)}, G = {shown(k.G)}, period {shown(period)}"
+        if distance is not None:
+            said += f", separatrix distance {shown(distance)}"
+        return (
+            f"<Euler1758 A, B, C = {shown(*k.inertia)}, P = ({shown(*direction)}): {said}, "
+            f"dps {self.dps}>"
+        )
 
     def constants(self, dps: int) -> _EulerConstants:
         """The constants at ``dps`` working digits (cached), built from the exact inputs."""
