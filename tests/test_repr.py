@@ -153,3 +153,23 @@ def test_cayley1846_state_and_quadratures_repr(cayley):
     assert f"t = {_six(quadratures.t)}, angle increment {_six(quadratures.angle_increment)}" in text
     assert f"{quadratures.turning_points} turning point" in text
     assert text.endswith(f"error {mpmath.nstr(quadratures.error, 2)}>")
+
+
+def test_projectile_solution_repr_says_eta_varpi_s_and_worst_error():
+    e, p = ("0.1", "-0.2", "1"), ("1", "0.5", "2")
+    solution = reference.projectile_solution("9.81", "0.3", "0.5", e, p, "1.5", dps=20)
+    text = repr(solution)
+    _one_short_line(text, "ProjectileSolution")
+    assert f"η = ({_six(*solution.eta)}), ϖ = ({_six(*solution.varpi)})" in text
+    assert f"S = {_six(solution.S)}" in text
+    assert text.endswith(f"error {mpmath.nstr(solution.error, 2)}>")
+
+
+def test_principal_function_repr_says_s_its_derivatives_and_worst_error():
+    eta, e = ("1.5", "0.5", "-7"), ("0.1", "-0.2", "1")
+    pf = reference.principal_function(eta, e, "1.5", "9.81", "0.3", "0.5", dps=20)
+    text = repr(pf)
+    _one_short_line(text, "PrincipalFunction")
+    assert f"S = {_six(pf.S)}, ∂S/∂η = ({_six(*pf.d_eta)}), ∂S/∂e = ({_six(*pf.d_e)})" in text
+    assert f"∂S/∂t = {_six(pf.d_t)}" in text
+    assert text.endswith(f"error {mpmath.nstr(pf.error, 2)}>")

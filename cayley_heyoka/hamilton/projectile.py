@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 
 import mpmath
 
-from ..core.accuracy import Certified, certify, to_mpf
+from ..core.accuracy import Certified, certify, shown, shown_error, to_mpf
 from ..core.inputs import check_dps, read_triple
 
 __all__ = ["PrincipalFunction", "ProjectileSolution", "principal_function", "projectile_solution"]
@@ -59,7 +59,7 @@ __all__ = ["PrincipalFunction", "ProjectileSolution", "principal_function", "pro
 _VEC = tuple[mpmath.mpf, mpmath.mpf, mpmath.mpf]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class ProjectileSolution:
     """The projectile at time t from its initial data (e, p).
 
@@ -86,8 +86,16 @@ class ProjectileSolution:
         """The worst error estimate."""
         return max(self.errors.values())
 
+    def __repr__(self) -> str:
+        """One line: η, ϖ, S and the worst error estimate (t, g, μ, ν are the caller's: the
+        solution does not keep them)."""
+        return (
+            f"<ProjectileSolution η = ({shown(*self.eta)}), ϖ = ({shown(*self.varpi)}), "
+            f"S = {shown(self.S)}, error {shown_error(self.error)}>"
+        )
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, repr=False)
 class PrincipalFunction:
     """Hamilton's principal function S(η, e, t) (120.) and its partial derivatives.
 
@@ -116,6 +124,15 @@ class PrincipalFunction:
     def error(self) -> mpmath.mpf:
         """The worst error estimate."""
         return max(self.errors.values())
+
+    def __repr__(self) -> str:
+        """One line: S, its partial derivatives and the worst error estimate (η, e, t are the
+        caller's: the result does not keep them)."""
+        return (
+            f"<PrincipalFunction S = {shown(self.S)}, ∂S/∂η = ({shown(*self.d_eta)}), "
+            f"∂S/∂e = ({shown(*self.d_e)}), ∂S/∂t = {shown(self.d_t)}, "
+            f"error {shown_error(self.error)}>"
+        )
 
 
 # -- regular functions of x = ωt --------------------------------------------------------------
