@@ -39,7 +39,7 @@ class PrecisionNotReached(ArithmeticError):
     dps : int
         Requested decimal digits.
     estimate : float
-        The error estimate that was reached (scaled: absolute if |value| ≤ 1, else relative).
+        The error estimate that was reached (scaled: absolute if ``|value| ≤ 1``, else relative).
     """
 
     def __init__(self, quantity: str, dps: int, estimate: float, hint: str = "") -> None:

@@ -40,7 +40,7 @@ which tend to (130.) as μ, ν → 0. Along the motion, T + U = ½ d(η·ϖ)/dt 
 the cancellation of η·ϖ − e·p at small t.
 
 Every value is computed at two working precisions (:mod:`..reference.accuracy`) and carries
-its error estimate (absolute for |value| ≤ 1, relative above); a request that cannot be met
+its error estimate (absolute for ``|value| ≤ 1``, relative above); a request that cannot be met
 raises :class:`~cayley_heyoka.reference.PrecisionNotReached`.
 """
 
@@ -73,7 +73,7 @@ class ProjectileSolution:
         The principal function ∫₀ᵗ(T + U) dt along the motion, i.e. S(η(t), e, t) of (120.).
     errors : dict
         Error estimate of each quantity, keyed ``eta1 … eta3``, ``varpi1 … varpi3``, ``S``
-        (absolute if |value| ≤ 1, else relative).
+        (absolute if ``|value| ≤ 1``, else relative).
     """
 
     eta: _VEC
@@ -111,7 +111,7 @@ class PrincipalFunction:
         ∂S/∂t, minus the energy H.
     errors : dict
         Error estimate of each quantity, keyed ``S``, ``d_eta1 … d_eta3``, ``d_e1 … d_e3``,
-        ``d_t`` (absolute if |value| ≤ 1, else relative).
+        ``d_t`` (absolute if ``|value| ≤ 1``, else relative).
     """
 
     S: mpmath.mpf
@@ -402,7 +402,7 @@ def principal_function(
 
     Notes
     -----
-    Close to a conjugate point the terms of S grow like 1/|sin μt| (S itself does for a
+    Close to a conjugate point the terms of S grow like ``1/|sin μt|`` (S itself does for a
     generic η) and the digits lost there are added to the working precision.
     """
     dps = check_dps(dps)

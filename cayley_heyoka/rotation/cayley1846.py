@@ -76,7 +76,7 @@ class Cayley1846State:
         (w, x, y, z), Hamilton's convention, (x, y, z)/w = (λ, μ, ν); continuous in t and regular
         at θ = π, with w > 0 at t = 0.
     errors : dict
-        Error estimate per quantity (absolute if |value| ≤ 1, else relative); the quaternion's
+        Error estimate per quantity (absolute if ``|value| ≤ 1``, else relative); the quaternion's
         components are ``quaternion_w`` … ``quaternion_z``.
     """
 
@@ -292,7 +292,7 @@ class Cayley1846:
     a, b, c : mpf
         Space components of the angular momentum.
     h, k : mpf
-        Twice the kinetic energy and |L|.
+        Twice the kinetic energy and ``|L|``.
 
     Raises
     ------

@@ -89,7 +89,7 @@ class FreeBodyState:
     quaternion : tuple of mpf
         (w, x, y, z) of the body relative to the space frame of the initial attitude.
     errors : dict
-        Error estimate of each quantity (absolute if |value| ≤ 1, else relative).
+        Error estimate of each quantity (absolute if ``|value| ≤ 1``, else relative).
     """
 
     t: mpmath.mpf
@@ -163,9 +163,9 @@ class FreeRigidBody:
 
     Notes
     -----
-    Exposes ``h`` (= 2T), ``k`` (= |L|), ``m``, ``frequency`` (Ω of u = Ωt + u₀), ``period``
+    Exposes ``h`` (= 2T), ``k`` (= ``|L|``), ``m``, ``frequency`` (Ω of u = Ωt + u₀), ``period``
     (of p, q, r), ``psi_increment`` (of Ψ per period), ``separatrix_distance``
-    ((2T·B_mid − |L|²)/|L|²), ``momentum_space`` ((g, g′, g″), space components of L) and
+    (``(2T·B_mid − |L|²)/|L|²``), ``momentum_space`` ((g, g′, g″), space components of L) and
     ``kind`` ("asymmetric", "symmetric" or "steady").
     """
 

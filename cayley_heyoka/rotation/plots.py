@@ -62,7 +62,7 @@ def polhode(result: Result, ax: Axes | None = None) -> Axes:
     """The polhode: the angular velocity (p, q, r) in body axes, in 3-D.
 
     For a torque-free body it lies on the energy ellipsoid Ap² + Bq² + Cr² = 2T (drawn
-    faintly) and on the momentum ellipsoid A²p² + B²q² + C²r² = |L|², and it is closed. Under
+    faintly) and on the momentum ellipsoid ``A²p² + B²q² + C²r² = |L|²``, and it is closed. Under
     a torque neither is fixed: the curve is drawn alone and the title says so.
 
     Parameters
@@ -142,8 +142,8 @@ def _polhode_3d(ax: Axes, result: Result, rates: np.ndarray, inertia: np.ndarray
 def crossings(result: Result, ax: Axes | None = None) -> Axes:
     """The invariable-plane crossings: each body axis's elevation above that plane.
 
-    The sine of axis x₁'s elevation is its component along L, Ap/|L| (y₁: Bq/|L|, z₁: Cr/|L|),
-    from the body rates and the principal moments of the scene. Each recorded
+    The sine of axis x₁'s elevation is its component along L, ``Ap/|L|`` (y₁: ``Bq/|L|``,
+    z₁: ``Cr/|L|``), from the body rates and the principal moments of the scene. Each recorded
     ``invariable_plane`` event is marked on the zero line in its axis's colour, ▲ for an
     upward crossing and ▼ for a downward one. Under a torque L is not conserved: the plane is
     the one perpendicular to the instantaneous L (as the event uses), and the title says so.

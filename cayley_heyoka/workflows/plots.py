@@ -116,10 +116,10 @@ def __getattr__(name: str) -> Any:
 
 # ------------------------------------------------------------------ drift
 def drift_of(result: Result) -> dict[str, np.ndarray]:
-    """|Relative drift| of each conserved monitor of ``result``, by monitor name.
+    """``|relative drift|`` of each conserved monitor of ``result``, by monitor name.
 
     A vector monitor (``momentum_space``, ``angular_momentum``) is reduced to its largest
-    |component| at each time, the component drifts being relative to the initial vector's norm
+    ``|component|`` at each time, the component drifts being relative to the initial vector's norm
     (:meth:`Result.drift`).
 
     Raises
@@ -148,7 +148,7 @@ def drift(
     ax: Axes | None = None,
     title: str = "",
 ) -> Axes:
-    """|Relative drift| against time on log–log axes.
+    """``|relative drift|`` against time on log–log axes.
 
     Parameters
     ----------

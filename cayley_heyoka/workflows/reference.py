@@ -117,7 +117,7 @@ def generate_reference(
     scene
         The scene (its ``[integrator]`` precision and tolerance are replaced).
     digits
-        Significant decimal digits to certify (scaled: absolute for |x| ≤ 1).
+        Significant decimal digits to certify (scaled: absolute for ``|x| ≤ 1``).
     out
         The HDF5 file to write.
     precision

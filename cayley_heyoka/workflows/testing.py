@@ -79,7 +79,7 @@ def assert_trajectory_close(
     ------
     AssertionError
         The output times differ, or some difference exceeds the allowed one: the message names
-        each failing variable, its worst point (time, output index, |Δ| against allowed), how
+        each failing variable, its worst point (time, output index, ``|Δ|`` against allowed), how
         many points fail out of how many, and the first failing time.
     ValueError, TypeError
         Bad arguments, or a certificate whose shape does not match its variable.
