@@ -1,88 +1,107 @@
-"""Every tutorial in docs/tutorials runs as written.
+"""The tutorials are notebooks that the docs build executes, and fails on.
 
-A tutorial is Markdown whose fenced blocks run in order, in a scratch directory holding a copy
-of ``examples/``, as a reader following it from the repository's root would:
-
-* ``console`` blocks: each line starting with ``$ `` is a shell command (a trailing ``\\``
-  continues it); the other lines are the output it printed when the tutorial was written.
-  A command that exits non-zero fails the test unless the block is marked ``<!-- exit N -->``.
-* ``python`` blocks run in one namespace per tutorial.
-* A block preceded by ``<!-- not-run: reason -->`` is shown but not run (a scheduler address
-  that exists only on the reader's cluster, say).
-* ``<!-- file: NAME -->`` before a block writes the block's text to ``NAME`` instead of running
-  it (a test module or a study file the tutorial goes on to use).
+The docs build (README, "Documentation"; docs/conf.py) runs every tutorial in docs/tutorials
+as a MyST-NB notebook, regenerating its outputs and failing on a command that exits with an
+unexpected status or on an assertion about the prose; so the tutorials are not run a second
+time here. These checks are structural and take no time: each tutorial is a notebook the
+build executes, in a scratch directory, with no output pasted into its source, and the
+``%%shell`` cells they rely on fail when a command does.
 """
 
 from __future__ import annotations
 
-import os
+import importlib.util
 import re
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
-
-_FENCE = re.compile(
-    r"(?:<!--\s*(?P<marker>[^>]*?)\s*-->\s*\n)?```(?P<lang>[\w-]*)\n(?P<body>.*?)\n```", re.DOTALL
-)
+DOCS = ROOT / "docs"
+TUTORIALS = sorted((DOCS / "tutorials").glob("*.md"))
+_FENCE = re.compile(r"^```(?P<info>[^\n`]*)$", re.MULTILINE)
 
 
-def blocks(text: str) -> list[tuple[str, str, str]]:
-    """(language, marker, body) of each fenced block, in order."""
-    return [(m["lang"], m["marker"] or "", m["body"]) for m in _FENCE.finditer(text)]
+def _fences(text: str) -> list[str]:
+    """The info string of each opening fence (the closing ones are dropped in pairs)."""
+    return [m["info"].strip() for m in _FENCE.finditer(text)][::2]
 
 
-def commands(console: str) -> list[str]:
-    """The ``$ `` commands of a console block, continuation lines joined."""
-    out: list[str] = []
-    pending = ""
-    for line in console.splitlines():
-        if pending:
-            pending += "\n" + line
-        elif line.startswith("$ "):
-            pending = line[2:]
-        else:
-            continue
-        if not pending.endswith("\\"):
-            out.append(pending)
-            pending = ""
-    return out
+def _module(path: Path, name: str):
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_there_are_tutorials():
+    assert len(TUTORIALS) >= 4, TUTORIALS
 
 
 @pytest.mark.parametrize("tutorial", TUTORIALS, ids=[p.stem for p in TUTORIALS])
-def test_tutorial_runs_as_written(tutorial, tmp_path, monkeypatch):
-    shutil.copytree(ROOT / "examples", tmp_path / "examples")
-    monkeypatch.chdir(tmp_path)
-    env = dict(os.environ)
-    # The interpreter running the tests, and its console scripts, come first on PATH.
-    env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
-    namespace: dict = {"__name__": f"tutorial_{tutorial.stem}"}
-    ran = 0
-    for lang, marker, body in blocks(tutorial.read_text()):
-        if marker.startswith("not-run"):
-            continue
-        if marker.startswith("file:"):
-            target = tmp_path / marker.split(":", 1)[1].strip()
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_text(body + "\n")
-            continue
-        if lang == "python":
-            exec(compile(body, f"{tutorial.name} (python block)", "exec"), namespace)
-            ran += 1
-        elif lang == "console":
-            expected = int(marker.split()[1]) if marker.startswith("exit") else 0
-            for command in commands(body):
-                proc = subprocess.run(
-                    ["bash", "-c", command], env=env, capture_output=True, text=True
-                )
-                assert proc.returncode == expected, (
-                    f"{tutorial.name}: `{command}` exited {proc.returncode} "
-                    f"(expected {expected})\n{proc.stdout}\n{proc.stderr}"
-                )
-                ran += 1
-    assert ran, f"{tutorial.name} has nothing to run"
+def test_tutorial_is_an_executed_notebook(tutorial):
+    text = tutorial.read_text()
+    front = text.split("---\n")[1] if text.startswith("---\n") else ""
+    assert "file_format: mystnb" in front, f"{tutorial.name}: not a MyST-NB notebook"
+    assert "kernelspec:" in front, f"{tutorial.name}: names no kernel"
+    fences = _fences(text)
+    cells = [f for f in fences if f.startswith("{code-cell}")]
+    assert cells, f"{tutorial.name}: has no code cell"
+    # The first cell moves into a scratch copy of examples/, so that the build writes nothing
+    # into the repository.
+    first = text.split("```{code-cell}", 2)[1]
+    assert "remove-cell" in first and "start()" in first, f"{tutorial.name}: no setup cell first"
+    # Outputs come from the build; a fence without a language (or `text`) would be one pasted
+    # in, and go stale unseen.
+    stored = [f for f in fences if f in ("", "text", "output")]
+    assert not stored, f"{tutorial.name}: output blocks pasted into the source: {stored}"
+
+
+def test_every_tutorial_is_in_the_table_of_contents():
+    index = (DOCS / "index.md").read_text()
+    for tutorial in TUTORIALS:
+        assert f"tutorials/{tutorial.stem}\n" in index, f"{tutorial.name} is in no toctree"
+
+
+def test_the_build_executes_the_notebooks_and_fails_on_an_error():
+    conf = _module(DOCS / "conf.py", "docs_conf")
+    assert conf.nb_execution_mode == "force"
+    assert conf.nb_execution_raise_on_error is True
+    assert not getattr(conf, "nb_execution_allow_errors", False)
+    assert not getattr(conf, "nb_execution_excludepatterns", ())
+
+
+@pytest.fixture
+def shell(monkeypatch):
+    """The ``%%shell`` magic of docs/tutorials/tutorial_setup.py, outside a notebook."""
+    IPython = pytest.importorskip("IPython")  # installed with the docs extra (ipykernel)
+    namespace: dict = {}
+    monkeypatch.setattr(IPython, "get_ipython", lambda: type("Shell", (), {"user_ns": namespace}))
+    setup = _module(DOCS / "tutorials" / "tutorial_setup.py", "tutorial_setup")
+    return lambda line, cell: (setup.shell(line, cell), namespace["shell_output"])[1]
+
+
+def test_shell_cells_print_and_keep_the_output(shell, capsys):
+    assert shell("", "echo one; echo two >&2") == "one\ntwo\n"
+    assert capsys.readouterr().out == "one\ntwo\n"
+
+
+@pytest.mark.parametrize(
+    "cell",
+    [
+        "exit 3",
+        "false; echo not reached",
+        "false | cat",
+        f"{sys.executable} -c 'raise SystemExit(2)'",
+    ],
+)
+def test_shell_cells_fail_on_a_failing_command(shell, cell):
+    with pytest.raises(RuntimeError, match="expected 0"):
+        shell("", cell)
+
+
+def test_shell_cells_expect_the_status_they_name(shell):
+    assert shell("--exit 2", "echo refused; exit 2") == "refused\n"
+    with pytest.raises(RuntimeError, match="exited 0, expected 2"):
+        shell("--exit 2", "true")
