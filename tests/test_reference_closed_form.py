@@ -9,6 +9,7 @@ clean Ctrl-C that resumes to the same bits.
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import subprocess
@@ -256,3 +257,15 @@ def test_the_command_line_passes_workers(tmp_path):
     _same_bits(ch.load_result(one), ch.load_result(two))
     with pytest.raises(SystemExit):
         main([*argv, "--out", str(tmp_path / "x.h5"), "--workers", "0"])
+
+
+def test_the_worst_error_is_placed_at_a_time_only_when_it_has_one():
+    """An event's error is of its time: the summary names the event, not "at t = nan"."""
+    from cayley_heyoka.core.certificate import Certificate
+    from cayley_heyoka.workflows.reference import _where
+
+    cert = Certificate("closed form", "the closed form's bound", {}, {})
+    cert.worst = ("p", 2.5)
+    assert _where(cert) == "p at t = 2.5"
+    cert.worst = ("event invariable_plane", math.nan)
+    assert _where(cert) == "event invariable_plane"

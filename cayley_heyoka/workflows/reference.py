@@ -271,12 +271,9 @@ def generate_reference(
                 "worst": list(cert.worst),
             }
         )
-        where = cert.worst[0]
-        if math.isfinite(cert.worst[1]):  # an event's error is of its time, not at an output
-            where += f" at t = {cert.worst[1]:.6g}"
         say(
             f"certificate: {cert.digits():.1f} digits (largest scaled error {cert.scaled:.2e} "
-            f"in {where})"
+            f"in {_where(cert)})"
         )
         if cert.scaled <= 10.0**-digits:
             break
@@ -345,8 +342,7 @@ def _closed_form_reference(
         say(
             f"closed form: {len(result.t)} times in {label(prec)}, "
             f"{time.perf_counter() - t0:.2f} s{note}; certificate: {cert.digits():.1f} digits "
-            f"(largest scaled error {cert.scaled:.2e} in {cert.worst[0]} at "
-            f"t = {cert.worst[1]:.6g})"
+            f"(largest scaled error {cert.scaled:.2e} in {_where(cert)})"
         )
         if cert.scaled <= 10.0**-digits or next_precision(prec).bits > max_bits:
             break
@@ -418,6 +414,13 @@ def _environment() -> dict[str, str]:
         "mpmath_backend": mpmath.libmp.BACKEND,
         "h5py": h5py.__version__,
     }
+
+
+def _where(cert: Certificate) -> str:
+    """Where the largest scaled error is: a variable at an output time, or an event (whose
+    error is of its time, at no output time)."""
+    name, at = cert.worst
+    return f"{name} at t = {at:.6g}" if math.isfinite(at) else name
 
 
 def _write(
