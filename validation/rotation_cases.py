@@ -3,8 +3,9 @@
 Every input is a Python float, i.e. an exact binary64 value. The scene keeps floats at their
 exact value in every precision (``docs/scenes.md``) and the reference reads them exactly too,
 so double, quad and 256-bit runs integrate the *same* numbers and are compared with the same
-exact solution. The one quantity built per precision is the Euler coefficients
-``(B − C)/A, …``, computed exactly from the moments and rounded once in the run's precision.
+exact solution. The one quantity built per precision is the differences of
+the moments ``B − C, …`` in Euler's equations, computed exactly and rounded once in the run's
+precision (exact for these moments).
 
 Spans are in periods of (p, q, r) (``FreeRigidBody.period``), per precision; ``quick`` spans
 are for the ``--quick`` smoke run. The 256-bit spans were chosen from a measured step cost

@@ -55,13 +55,12 @@ def build_model(scene: Scene) -> Model:
         attitude = _quaternion(body, pars, rates, q0, momentum, inertia)
 
     torque = attitude.torque if attitude else None
-    exact = eq.euler_coefficients(*(exact_fraction(v) for v in body.inertia))
-    names = ["euler[0]", "euler[1]", "euler[2]", "1/A", "1/B", "1/C"]
-    coeffs = [
-        pars.add(n, fraction_text(c, prec))
-        for n, c in zip(names[: 3 + 3 * bool(torque)], exact, strict=False)
+    exact = eq.euler_differences(*(exact_fraction(v) for v in body.inertia))
+    differences = [
+        pars.add(name, fraction_text(d, prec))
+        for name, d in zip(("B-C", "C-A", "A-B"), exact, strict=True)
     ]
-    system = list(zip(rates, eq.euler_rates(coeffs[:3], rates, torque, coeffs[3:]), strict=True))
+    system = list(zip(rates, eq.euler_rates(differences, rates, inertia, torque), strict=True))
     initial = rates0
     terminal = []
     if attitude:

@@ -141,9 +141,10 @@ def learned(
             "moves δ by ~1%, so double integration loses all digits within a few periods "
             "whatever the integrator"
             + (" (" + "; ".join(digits) + ")" if digits else "")
-            + ". (Estimate, not measured: rounding the Euler coefficients (B − C)/A, … once "
-            "in the run's precision is a fixed perturbation of relative size ε/2; its phase "
-            "error grows like n, below the n^{3/2} of the round-off walk.)"
+            + ". (Estimate, not measured: rounding the differences B − C, … of Euler's "
+            "equations once in the run's precision, where they are not exact, is a fixed "
+            "perturbation of relative size ε/2; its phase error grows like n, below the "
+            "n^{3/2} of the round-off walk.)"
         )
     # Rodrigues vs quaternion.
     for prec in ("double", "quad", "real256"):
