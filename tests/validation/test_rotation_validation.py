@@ -109,3 +109,18 @@ def test_rodrigues_rebasing_through_half_turns():
     assert job["half_turns"] > 100 and job["rebasings"] > 100
     assert failing_rows(job) == []
     assert np.nanmax(job["errors"]["attitude"]) < 1e-10
+
+
+def test_drift_bias_measures_both_forms():
+    """validation/drift_bias.py runs (a few members, a few thousand steps): each form gives
+    finite figures for both quantities, and the package's form and the rounded quotient
+    integrate different equations (their drifts differ)."""
+    import drift_bias
+
+    package = drift_bias.measure(drift_bias.CONFIGS["package, quaternion"], 2e3, 3)
+    quotient = drift_bias.measure(drift_bias.CONFIGS["rounded quotient, quaternion"], 2e3, 3)
+    for figures in (package, quotient):
+        assert set(figures) == {"energy", "|L|²"}
+        for f in figures.values():
+            assert 1e3 < f["N"] < 1e4 and 0 < f["rms"] < 10 and 0 <= f["shared"] <= 1
+    assert package["energy"]["rms"] != quotient["energy"]["rms"]
