@@ -41,10 +41,10 @@ def euler_rates(
     Not ``((B − C)/A) q r`` with the quotient rounded once: that is cheaper (a product instead
     of a division in every Taylor order) but its rounded constant makes the round-off of
     ``T`` and ``|L|²`` lean one way step after step. On the generic body of
-    validation/rotation_cases.py (moments 1, 2, 3: the quotient −1/3 is rounded) 82–92 % of
-    the energy drift over 10⁷ steps was shared by every member of an ensemble a few ulps
-    apart — a deterministic drift faster than Brouwer's √N — against 0–31 % (independent
-    walks) with the division (issue 20; ``python validation/drift_bias.py``).
+    validation/rotation_cases.py (moments 1, 2, 3: the quotient −1/3 is rounded) 84–91 % of
+    the energy and |L|² drift over 10⁷ steps was shared by every member of an ensemble 1e-9
+    apart — a drift faster than Brouwer's √N — against 1–11 % (independent walks) with the
+    division (issue 20; validation/DRIFT_BIAS.md, ``python validation/drift_bias.py``).
     """
     p, q, r = rates
     products = [differences[0] * q * r, differences[1] * r * p, differences[2] * p * q]
