@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .files import FORMAT_VERSION, FORMATS, open_ours, write_hdf5
-from .labelled import COMPONENTS, component_dim
+from .labelled import COMPONENTS, component_dim, time_attrs, variable_attrs
 from .precision import Precision
 
 
@@ -268,12 +268,12 @@ class Result:
         )
         time = write_array(f, "time", self.t, prec)
         time.make_scale("time")
-        label(time, "time", self.unit("time"))
+        # The attributes of the labelled views, so that the file and to_xarray() agree.
+        time.attrs.update(time_attrs(self))
         for role, arrays in (("variable", self.variables), ("monitor", self.monitors)):
             for name, arr in arrays.items():
                 ds = write_array(f, name, arr, prec)
-                ds.attrs["role"] = role
-                label(ds, self.describe(name), self.unit(name))
+                ds.attrs.update(variable_attrs(self, name, role))
                 ds.dims[0].attach_scale(time)
                 if ds.ndim > 1:
                     ds.dims[1].attach_scale(component_scale(f, ds.shape[1]))

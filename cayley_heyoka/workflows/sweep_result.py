@@ -175,14 +175,7 @@ class SweepResult:
             "events": (("member", "event"), np.asarray(counts, dtype=np.int64)),
         }
         ds = xr.Dataset(data, coords=coords)
-        for name, long_name in (
-            ("drift", "relative drift of each conserved monitor"),
-            ("final_state", "the variables at the last output time"),
-            ("status", "0 completed, -1 failed, -2 not run"),
-            ("message", "why the member ended"),
-            ("steps", "Taylor steps"),
-            ("events", "occurrences of each recorded event"),
-        ):
+        for name, long_name in LONG_NAMES.items():
             ds[name].attrs["long_name"] = long_name
         ds.attrs.update(
             title=str(self.study.get("title") or ""),
@@ -460,6 +453,15 @@ def fill_chunk(result: SweepResult, part: Chunk, prec: Precision) -> None:
         )
 
 
+#: What each array of a sweep is: the file's and the xarray view's ``long_name``.
+LONG_NAMES = {
+    "drift": "relative drift of each conserved monitor",
+    "final_state": "the variables at the last output time",
+    "status": "0 completed, -1 failed, -2 not run",
+    "message": "why the member ended",
+    "steps": "Taylor steps",
+    "events": "occurrences of each recorded event",
+}
 #: Names the sweep file's layout takes for itself (a swept parameter may not take one).
 LAYOUT_NAMES = (
     "time", "member", "monitor", "variable", "event", "drift", "final_state", "status",
@@ -530,24 +532,24 @@ def _create(f: Any, result: SweepResult) -> None:
         data=drift if drift is not None else np.zeros((0, n, len(result.t))),
         dtype=np.float64,
     )
-    over(ds, ("monitor", "member", "time"), "relative drift of each conserved monitor")
+    over(ds, ("monitor", "member", "time"), LONG_NAMES["drift"])
     ds = write_array(f, "final_state", result.final_state, prec)
-    over(ds, ("member", "variable"), "the variables at the last output time")
+    over(ds, ("member", "variable"), LONG_NAMES["final_state"])
     ds = f.create_dataset("status", data=np.asarray(result.status, dtype=np.int8))
-    over(ds, ("member",), "0 completed, -1 failed, -2 not run")
+    over(ds, ("member",), LONG_NAMES["status"])
     ds = f.create_dataset(
         "message", data=np.asarray(result.message, dtype=object), dtype=string_dtype()
     )
-    over(ds, ("member",), "why the member ended")
+    over(ds, ("member",), LONG_NAMES["message"])
     ds = f.create_dataset("steps", data=np.asarray(result.steps, dtype=np.int64))
-    over(ds, ("member",), "Taylor steps")
+    over(ds, ("member",), LONG_NAMES["steps"])
     counts = np.stack([result.events[k] for k in result.events], axis=1) if result.events else None
     ds = f.create_dataset(
         "events",
         data=counts if counts is not None else np.zeros((n, 0)),
         dtype=np.int64,
     )
-    over(ds, ("member", "event"), "occurrences of each recorded event")
+    over(ds, ("member", "event"), LONG_NAMES["events"])
 
 
 class Writer:
