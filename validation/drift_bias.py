@@ -141,11 +141,50 @@ def measure(run: Callable, steps: float, members: int) -> dict[str, dict[str, fl
     return out
 
 
+def cost(steps: float, repeats: int = 5) -> list[tuple[str, float, float]]:
+    """What the division costs, as users run it: a whole ``cayley_heyoka.run()`` of about
+    ``steps`` steps against raw heyoka integrating the rounded-quotient form over the same
+    span, interleaved; returns (attitude, median seconds ours, median seconds raw heyoka)."""
+    rows = []
+    body = dataclasses.replace(CASE, rates=member_rates(0))
+    for formulation, attitude in (("quaternion", True), ("none", False)):
+
+        def scene(t_end: float, formulation: str = formulation) -> ch.Scene:
+            data = body.scene("double", [0.0, t_end], False, formulation)
+            if formulation == "none":  # the rates alone: no attitude, no space vector
+                data["output"]["monitors"] = ["energy", "momentum_squared"]
+            return ch.Scene.from_dict(data)
+
+        t_end = steps * 1000.0 / ch.run(scene(1000.0)).counters["steps"]
+        raw = rounded_quotient(attitude)
+        ours_s, raw_s = [], []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            ch.run(scene(t_end))
+            ours_s.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            raw(0, [0.0, t_end])
+            raw_s.append(time.perf_counter() - t0)
+        rows.append((formulation, float(np.median(ours_s)), float(np.median(raw_s))))
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, default=1e6, help="steps per member (1e6)")
     parser.add_argument("--members", type=int, default=32, help="ensemble size (32)")
+    parser.add_argument(
+        "--cost", action="store_true", help="time the division form against raw heyoka instead"
+    )
     args = parser.parse_args()
+    if args.cost:
+        print(
+            "| attitude | cayley_heyoka.run(), division (s) | raw heyoka, rounded quotient (s) "
+            "| ratio |\n|---|---|---|---|"
+        )
+        for formulation, ours, raw in cost(args.steps):
+            print(f"| {formulation} | {ours:.3f} | {raw:.3f} | {ours / raw:.2f} |")
+        return
     print(
         f"generic body (moments 1, 2, 3; rates {CASE.rates}), {args.members} members 1e-9 "
         f"apart, about {args.steps:.0e} steps each; drifts evaluated exactly\n"
