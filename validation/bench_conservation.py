@@ -30,8 +30,11 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import math
+import operator
 import time
+import tomllib
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -58,6 +61,12 @@ WINDOW_LAGS = (1, 2, 5, 10, 20, 50, 100)  # in uniform-grid intervals of N/1000 
 FLAG = {"ensemble": 0.65, "windows": 0.6}
 #: A shared fraction is flagged above this quantile of its distribution for independent walks.
 SHARED_QUANTILE = 0.99
+EXAMPLE_DIR = Path(__file__).resolve().parent.parent / "examples"
+#: Bundled scenes measured as they are: (file, the nudged number's path, formulation's table).
+EXAMPLES = {
+    "heavy top": ("heavy_top.toml", ("initial", "rates", 0), "attitude"),
+    "Hamilton": ("planets.toml", ("hamiltonian", "bodies", 0, "elements", "a"), "hamiltonian"),
+}
 FREE_BODIES = {
     "generic": "generic (moments 1, 2, 3)",
     "separatrix_m10": "separatrix (δ = −1e-10)",
@@ -75,32 +84,51 @@ class Case:
     body: str  # a rotation_cases name, or "e = 0.5"
     members: int
     steps: float
+    settings: tuple[tuple[str, Any], ...] = ()  # integrator options beside the defaults
 
     @property
     def quantities(self) -> tuple[tuple[str, str], ...]:
         """(label, monitor) pairs; a vector monitor is measured by the norm of its change."""
         if self.system == "free body":
+            rates = (("energy", "energy"), ("|L|²", "momentum_squared"))
+            # Without an attitude there is no space frame.
             return (
-                ("energy", "energy"),
-                ("|L|²", "momentum_squared"),
-                ("L (space)", "momentum_space"),
+                rates if self.formulation == "none" else (*rates, ("L (space)", "momentum_space"))
             )
+        if self.system == "heavy top":
+            return (("energy", "energy"), ("L · up", "momentum_vertical"))
+        if self.system == "Hamilton":
+            return (("energy", "energy"), ("Σ ξ × p", "angular_momentum"))
         return (("energy", "energy"), ("x × v", "angular_momentum"))
 
     @property
     def label(self) -> str:
         body = FREE_BODIES.get(self.body, self.body)
-        return f"{self.system}, {body}, {self.formulation}"
+        extra = "".join(f", {k} {v}" for k, v in self.settings)
+        return f"{self.system}, {body}, {self.formulation}{extra}"
 
     def scene(self, times: list[float], k: int = 0) -> dict[str, Any]:
         """Member ``k``'s scene on ``times``: its first number times 1 + k·SPREAD."""
-        integrator = {"max_steps": int(3 * self.steps)}  # the default budget is 10⁹ steps
+        # The default budget is 10⁹ steps.
+        integrator = {"max_steps": int(3 * self.steps), **dict(self.settings)}
         if self.system == "free body":
             case = BY_NAME[self.body]
             p, *rest = case.rates
             case = dataclasses.replace(case, rates=(p * (1 + k * SPREAD), *rest))
             scene = case.scene("double", times, events=False, formulation=self.formulation)
             scene["integrator"] |= integrator
+            scene["output"]["monitors"] = [m for _, m in self.quantities]
+            return scene
+        if self.system in EXAMPLES:
+            path, nudged, table = EXAMPLES[self.system]
+            with (EXAMPLE_DIR / path).open("rb") as f:
+                scene = tomllib.load(f)
+            *where, last = nudged
+            node = functools.reduce(operator.getitem, where, scene)
+            node[last] = float(node[last]) * (1 + k * SPREAD)
+            scene[table]["formulation"] = self.formulation
+            scene["integrator"] = integrator
+            scene["output"] = {"times": times, "monitors": [m for _, m in self.quantities]}
             return scene
         # e = 0.5: the step size varies along the orbit (short at the pericentre).
         elements = {
@@ -118,10 +146,14 @@ class Case:
         }
 
 
+FORMULATIONS = ("quaternion", "rodrigues")
+
+
 def cases(quick: bool) -> list[Case]:
-    """The measured cases: every bundled formulation of both systems, three free bodies; the
-    Rodrigues chart's ensembles are 8 members (its re-basings make it ~4× the quaternion's cost)
-    and one case runs to 10⁹ steps."""
+    """The measured cases: every formulation of the free body (three bodies) and of the Kepler
+    orbit to 10⁸ steps, one to 10⁹; the bundled heavy top and two planets by the canonical
+    equations to 10⁷ (forced, chaotic, each step dearer). The Rodrigues chart's ensembles are 8
+    members (its re-basings make it ~4× the quaternion's cost)."""
     if quick:
         return [
             Case("free body", "quaternion", "generic", 8, 2e4),
@@ -132,7 +164,10 @@ def cases(quick: bool) -> list[Case]:
     for body in FREE_BODIES:
         out += [Case("free body", "quaternion", body, 16, 1e8)]
         out += [Case("free body", "rodrigues", body, 8, 1e8)]
+    out += [Case("free body", "none", "generic", 16, 1e8)]
     out += [Case("Kepler", f, "e = 0.5", 16, 1e8) for f in ("cartesian", "cayley", "quaternion")]
+    out += [Case("heavy top", f, "examples/heavy_top.toml", 16, 1e7) for f in FORMULATIONS]
+    out += [Case("Hamilton", "canonical", "examples/planets.toml", 16, 1e7)]
     return out
 
 
@@ -385,7 +420,14 @@ def diagnose_fold(steps: float) -> Ensemble:
 
 
 # ---------------------------------------------------------------------------- plots
-def plot(system: str, data: dict[Case, Ensemble], fits: dict, out: Path) -> None:
+PLOTS = {
+    "free body": ("free body",),
+    "Kepler": ("Kepler",),
+    "forced": ("heavy top", "Hamilton"),
+}
+
+
+def plot(title: str, data: dict[Case, Ensemble], fits: dict, out: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -395,7 +437,7 @@ def plot(system: str, data: dict[Case, Ensemble], fits: dict, out: Path) -> None
     colours = iter(plt.rcParams["axes.prop_cycle"].by_key()["color"] * 4)
     n_max = 10.0
     for case, ens in data.items():
-        if case.system != system:
+        if case.system not in PLOTS[title]:
             continue
         n = ens.n[ens.log]
         n_max = max(n_max, float(n[-1]))
@@ -405,7 +447,8 @@ def plot(system: str, data: dict[Case, Ensemble], fits: dict, out: Path) -> None
             c = next(colours)
             d = ens.drifts[label][:, ens.log]
             rms = np.sqrt(np.mean(np.sum(d * d, axis=-1), axis=0))
-            name = f"{case.body if case.system == 'free body' else ''} {case.formulation}: {label}"
+            where = case.body if case.system == "free body" else case.system
+            name = f"{where} {case.formulation}: {label}"
             left.loglog(n, rms, "-", c=c, lw=1, label=name.strip())
             right.semilogx(n, shared(d), "-", c=c, lw=1)
     nn = np.geomspace(10, n_max, 50)
@@ -416,8 +459,8 @@ def plot(system: str, data: dict[Case, Ensemble], fits: dict, out: Path) -> None
     for ax in (left, right):
         ax.grid(True, which="both", alpha=0.25)
         ax.set_xlabel("steps n")
-    left.set_title(f"{system}: ensemble RMS drift")
-    right.set_title(f"{system}: the drift shared by all members")
+    left.set_title(f"{title}: ensemble RMS drift")
+    right.set_title(f"{title}: the drift shared by all members")
     left.legend(fontsize=6, ncol=2)
     fig.savefig(out, dpi=90)
     plt.close(fig)
@@ -432,8 +475,8 @@ def run(quick: bool, figures: Path) -> str:
     fits = {
         case: {label: fit(ens, label) for label, _ in case.quantities} for case, ens in data.items()
     }
-    for system in ("free body", "Kepler"):
-        plot(system, data, fits, figures / f"bench_cons_{system.replace(' ', '_').lower()}.png")
+    for title in PLOTS:
+        plot(title, data, fits, figures / f"bench_cons_{title.replace(' ', '_').lower()}.png")
     floors = {m: estimator_scatter(m, 200 if quick else 1000) for m in {c.members for c in data}}
     return section(data, fits, floors, fold, quick, time.perf_counter() - wall0)
 
@@ -492,8 +535,9 @@ def section(data, fits, floors, fold, quick: bool, seconds: float) -> str:
                 f"| {case.system} | {body} | {case.formulation} | {_cell(label)} | "
                 f"{case.members} | {N:.3g} | " + " | ".join(row) + " |"
             )
-    lines += ["", "![free body](figures/bench_cons_free_body.png)", ""]
-    lines += ["![Kepler](figures/bench_cons_kepler.png)", ""]
+    lines.append("")
+    for title in PLOTS:
+        lines += [f"![{title}](figures/bench_cons_{title.replace(' ', '_').lower()}.png)", ""]
     lines += cost_table(data)
     lines += findings(data, fits, floors, fold, quick)
     return "\n".join(lines)

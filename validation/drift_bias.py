@@ -1,6 +1,8 @@
 """Is the round-off drift a random walk, or does part of it lean one way? (issue 20)
 
 Run:  python validation/drift_bias.py [--steps 1e7] [--members 64]
+      python validation/drift_bias.py --settings [--steps 1e7]   (which settings reach the law)
+      python validation/drift_bias.py --cost [--steps 1e6]       (what the division costs)
 
 Brouwer's law: round-off makes a conserved quantity random-walk, RMS ε √N after N steps, and
 runs a few ulps apart walk independently. A bias — a rounding that leans the same way step after
@@ -169,6 +171,58 @@ def cost(steps: float, repeats: int = 5) -> list[tuple[str, float, float]]:
     return rows
 
 
+#: Integrator settings beside the defaults (tolerance ε, no step cap), for ``--settings``.
+SETTINGS = {
+    "defaults (tolerance ε)": (),
+    "high_accuracy": (("high_accuracy", True),),
+    "max_step 0.18 (the Rodrigues chart's step)": (("max_step", 0.18),),
+    "tolerance 1e-12": (("tolerance", "1e-12"),),
+    "tolerance 1e-9": (("tolerance", "1e-9"),),
+}
+
+
+def settings_table(steps: float, members: int) -> list[str]:
+    """The generic body under each of ``SETTINGS``, both attitude formulations, through
+    bench_conservation's ensembles (the sweeps' batch lanes): which settings random-walk."""
+    import bench_conservation as bc
+
+    cases = [
+        bc.Case("free body", formulation, "generic", members, steps, settings)
+        for settings in SETTINGS.values()
+        for formulation in ("quaternion", "rodrigues")
+    ]
+    data = bc.measure(cases)
+    floor = bc.estimator_scatter(members, 300)
+    names = {v: k for k, v in SETTINGS.items()}
+    rows = [
+        "| settings | attitude | quantity | N | RMS / (ε√N) | exponent | shared (median) | "
+        "windows | windows shared |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for case, ens in data.items():
+        for label in ("energy", "|L|²"):
+            f = bc.fit(ens, label)
+            marks = bc.flagged(f, floor)
+            cells = [
+                bc._num(f.rms),
+                bc._num(f.exponent, "ensemble" in marks),
+                bc._num(f.shared_tail, "shared" in marks),
+                bc._num(f.windows, "windows" in marks),
+                bc._num(f.windows_shared, "windows shared" in marks),
+            ]
+            rows.append(
+                f"| {names[case.settings]} | {case.formulation} | {bc._cell(label)} | "
+                f"{np.mean(ens.steps):.3g} | " + " | ".join(cells) + " |"
+            )
+    rows.append(
+        f"\n{members} members 1e-9 apart; for independent walks the median shared fraction stays "
+        f"≤ {floor['shared'][0]:.2f} and the windows shared ≤ {floor['windows_shared'][0]:.2f} "
+        f"(99 %), the exponents {floor['ensemble'][0]:.2f} ± {floor['ensemble'][1]:.2f} and "
+        f"{floor['windows'][0]:.2f} ± {floor['windows'][1]:.2f}; ⚠ as in validation/BENCHMARKS.md."
+    )
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=float, default=1e6, help="steps per member (1e6)")
@@ -176,7 +230,13 @@ def main() -> None:
     parser.add_argument(
         "--cost", action="store_true", help="time the division form against raw heyoka instead"
     )
+    parser.add_argument(
+        "--settings", action="store_true", help="the package's form under integrator settings"
+    )
     args = parser.parse_args()
+    if args.settings:
+        print("\n".join(settings_table(args.steps, min(args.members, 16))))
+        return
     if args.cost:
         print(
             "| attitude | cayley_heyoka.run(), division (s) | raw heyoka, rounded quotient (s) "
