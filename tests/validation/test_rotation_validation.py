@@ -124,3 +124,34 @@ def test_drift_bias_measures_both_forms():
         for f in figures.values():
             assert 1e3 < f["N"] < 1e4 and 0 < f["rms"] < 10 and 0 <= f["shared"] <= 1
     assert package["energy"]["rms"] != quotient["energy"]["rms"]
+
+
+def test_shared_fraction_tells_a_common_drift_from_independent_walks():
+    """bench_conservation's shared fraction: independent walks stay under the simulated
+    floor, a drift every member shares reaches it, over members and over windows in time."""
+    import bench_conservation as bc
+
+    rng = np.random.default_rng(7)
+    times, log, uniform = bc.grid(1.0)
+    t = np.array(times)
+    steps = rng.normal(size=(16, len(t) - 1)) * np.sqrt(np.diff(t))
+    walks = np.concatenate([np.zeros((16, 1)), np.cumsum(steps, axis=1)], axis=1)[..., None]
+    # A drift 5× the walk's RMS at the end: over a tenth of the span, 0.5 against √0.1.
+    biased = walks + 5.0 * t[None, :, None]
+    floor = bc.estimator_scatter(16, 200)
+    ens = bc.Ensemble(t, log, uniform, np.full(16, 1e8), 0.0, {"walk": walks, "biased": biased})
+    walk, bias = bc.fit(ens, "walk"), bc.fit(ens, "biased")
+    assert bc.flagged(walk, floor) == []
+    assert walk.shared_tail < floor["shared"][0] and walk.windows_shared < 0.3
+    assert bias.shared_end > 0.95 and bias.windows_shared > 0.8
+    assert {"shared", "windows shared", "windows"} <= set(bc.flagged(bias, floor))
+
+
+def test_drift_bias_settings_table_runs():
+    """drift_bias.py --settings: every setting, both attitudes, figures in every cell."""
+    import drift_bias
+
+    rows = drift_bias.settings_table(2e3, 4)
+    body = [r for r in rows if r.startswith("| ") and "settings" not in r]
+    assert len(body) == 2 * 2 * len(drift_bias.SETTINGS)
+    assert not any("–" in r for r in body)
