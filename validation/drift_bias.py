@@ -175,6 +175,7 @@ def cost(steps: float, repeats: int = 5) -> list[tuple[str, float, float]]:
 SETTINGS = {
     "defaults (tolerance ε)": (),
     "high_accuracy": (("high_accuracy", True),),
+    "tolerance 1e-18 (order 22)": (("tolerance", "1e-18"),),
     "max_step 0.18 (the Rodrigues chart's step)": (("max_step", 0.18),),
     "tolerance 1e-12": (("tolerance", "1e-12"),),
     "tolerance 1e-9": (("tolerance", "1e-9"),),
