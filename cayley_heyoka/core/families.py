@@ -11,7 +11,7 @@ family's module is imported the first time the registry is asked for it.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import import_module
 from typing import Any
 
@@ -99,6 +99,35 @@ def later(module: str, name: str) -> Callable[..., Any]:
     return call
 
 
+def _with_user_monitors(build: Callable[[Any], Any]) -> Callable[[Any], Any]:
+    """A family's ``build`` that adds the scene's ``[monitors]`` (:mod:`.user_monitors`) to
+    the model, so that every family offers them without knowing of them."""
+
+    def call(scene: Any) -> Any:
+        from .user_monitors import add_monitors, family_view
+
+        return add_monitors(build(family_view(scene)), scene)
+
+    call.__qualname__ = f"with_user_monitors({getattr(build, '__qualname__', build)})"
+    return call
+
+
+def _with_user_variables(
+    variables: Callable[[Mapping[str, Any], str], str | None] | None,
+) -> Callable[[Mapping[str, Any], str], str | None]:
+    """A family's ``variables`` that also describes the scene's ``[monitors]``."""
+
+    def call(scene: Mapping[str, Any], name: str) -> str | None:
+        table = scene.get("monitors") if isinstance(scene, Mapping) else None
+        spec = table.get(name) if isinstance(table, Mapping) else None
+        if isinstance(spec, Mapping) and isinstance(spec.get("expression"), str):
+            judged = "conserved" if spec.get("conserved", True) is True else "not conserved"
+            return f"user monitor ({judged}): {spec['expression']}"
+        return variables(scene, name) if variables is not None else None
+
+    return call
+
+
 class _Registry(Mapping[str, Family]):
     """Family name → :class:`Family`, each imported when first asked for."""
 
@@ -136,6 +165,11 @@ class _Registry(Mapping[str, Family]):
                 ) from exc
             if not isinstance(family, Family) or family.name != name:
                 raise SceneError("families", f"{path!r} is not the Family {name!r}")
+            family = replace(
+                family,
+                build=_with_user_monitors(family.build),
+                variables=_with_user_variables(family.variables),
+            )
             self._loaded[name] = family
         return family
 

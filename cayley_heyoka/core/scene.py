@@ -331,6 +331,46 @@ class UserEvent:
         return cls(name, table["expression"], _DIRECTIONS[direction])
 
 
+#: At most this many user monitors per scene (each is one more compiled output).
+MAX_MONITORS = 100
+
+
+@dataclass(frozen=True)
+class UserMonitor:
+    """A monitored quantity written as an expression of the model's outputs
+    (:mod:`.user_monitors` adds it to the model)."""
+
+    name: str
+    expression: str
+    conserved: bool = True
+
+
+def parse_monitors(table: Any) -> dict[str, UserMonitor]:
+    """The scene's ``[monitors]`` table: ``NAME = {expression = "…", conserved = true}``."""
+    if not isinstance(table, Mapping):
+        raise SceneError("monitors", "must be a table of [monitors.NAME] tables")
+    if len(table) > MAX_MONITORS:
+        raise SceneError("monitors", f"at most {MAX_MONITORS} monitors, got {len(table)}")
+    out = {}
+    for name, spec in table.items():
+        where = f"monitors.{name}"
+        if not isinstance(name, str) or not name.isidentifier() or name.startswith("_"):
+            raise SceneError(where, "a monitor's name must be an identifier (letters, digits, _)")
+        if not isinstance(spec, Mapping):
+            raise SceneError(where, f'must be a table {{expression = "…"}}, got {spec!r}')
+        check_keys(spec, ["expression", "conserved"], where)
+        if "expression" not in spec:
+            raise SceneError(f"{where}.expression", "is required")
+        text = spec["expression"]
+        if not isinstance(text, str) or not text.strip():
+            raise SceneError(f"{where}.expression", f"must be non-empty text, got {text!r}")
+        conserved = spec.get("conserved", True)
+        if not isinstance(conserved, bool):
+            raise SceneError(f"{where}.conserved", f"must be true or false, got {conserved!r}")
+        out[name] = UserMonitor(name, text, conserved)
+    return out
+
+
 # ---------------------------------------------------------------------- the scene
 @dataclass(frozen=True)
 class Scene:
@@ -347,6 +387,7 @@ class Scene:
     events: Mapping[str, UserEvent]
     title: str
     source: Mapping[str, Any]
+    monitors: Mapping[str, UserMonitor] = field(default_factory=dict)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Scene:
@@ -357,7 +398,7 @@ class Scene:
             raise SceneError("scene", f"must be a table, got {type(data).__name__}")
         family = family_of(data)
         spec = FAMILIES[family]
-        generic = ["title", "integrator", "output", "events"]
+        generic = ["title", "integrator", "output", "events", "monitors"]
         check_keys(data, [*generic, *spec.tables], "")
         title = data.get("title", "")
         if not isinstance(title, str):
@@ -368,8 +409,9 @@ class Scene:
         if not isinstance(events_table, Mapping):
             raise SceneError("events", "must be a table of [events.NAME] tables")
         events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
+        monitors = parse_monitors(data.get("monitors", {}))
         model = spec.parse({k: data[k] for k in spec.tables if k in data})
-        scene = cls(family, model, integrator, output, events, title, plain_copy(data))
+        scene = cls(family, model, integrator, output, events, title, plain_copy(data), monitors)
         if spec.validate is not None:
             spec.validate(scene)
         return scene
