@@ -210,6 +210,16 @@ class Precision:
             value = value.numerator
         return hy.expression(self.number(value))
 
+    def dyadic(self, n: int, e: int) -> Any:
+        """``n 2ᵉ`` rounded once to the target type, in its own arithmetic: the integer is
+        rounded once (a Python float, ``real128`` or ``real`` built from it) and the scaling
+        by 2ᵉ is exact. No decimal text: cheap enough for an event handler."""
+        if self.kind == "double":
+            return math.ldexp(float(n), e)
+        if self.kind == "quad":
+            return hy.real128(n) * hy.real128(math.ldexp(1.0, e))
+        return hy.real(n, self.bits) * hy.real(math.ldexp(1.0, e), self.bits)
+
     def array(self, values: Iterable[Number]) -> np.ndarray:
         """A 1-d numpy array of ``values`` in the target type."""
         values = list(values)
@@ -259,6 +269,13 @@ def _exact_text(value: Any) -> str:
         s = str(abs(digits)).rjust(k + 1, "0")
         return f"{sign}{s[:-k]}.{s[-k:]}" if k else f"{sign}{s}"
     return str(value)
+
+
+def dyadic_parts(value: Any) -> tuple[int, int]:
+    """(m, e) with the mpmath number ``value = m 2ᵉ`` exactly."""
+    sign, man, exp, _ = value._mpf_
+    man = int(man)  # an mpz under mpmath's gmpy2 backend, which heyoka's types refuse
+    return (-man if sign else man), int(exp)
 
 
 def exact_fraction(value: Number) -> Fraction:

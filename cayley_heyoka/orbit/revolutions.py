@@ -23,14 +23,12 @@ per revolution.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-import heyoka as hy
 import mpmath
 
 from ..core.model import ParTable
-from ..core.precision import Precision
+from ..core.precision import Precision, dyadic_parts
 
 Expr = Any  # a heyoka expression
 
@@ -59,8 +57,8 @@ class Revolutions:
             self._C = +(2 * mpmath.pi)  # exactly the value C takes in the run's precision
         with mpmath.workprec(precision.bits + 128):
             # C − 2π, to enough bits that k (C − 2π) rounds as the exact product would.
-            self._D = _dyadic(self._C - 2 * mpmath.pi)
-        self._C_parts = _dyadic(self._C)
+            self._D = dyadic_parts(self._C - 2 * mpmath.pi)
+        self._C_parts = dyadic_parts(self._C)
         self._C_run = precision.number(self._text(self._C))
         with mpmath.workdps(self._dps):
             rho = mpmath.mpf(rho0)
@@ -69,8 +67,6 @@ class Revolutions:
         self.two_pi = pars.add("orbit.two_pi", self._text(self._C))
         self.offset = pars.add("orbit.rho_offset", self._offset_text())
         self.phase = pars.add("orbit.rho_phase", self._phase_text())
-        if precision.kind == "double":
-            self._scaled = _double_scaled
         self._offset_index = pars.index("orbit.rho_offset")
         self._phase_index = pars.index("orbit.rho_phase")
 
@@ -91,7 +87,7 @@ class Revolutions:
         ta.state[self.state_index] -= self._C_run
         self.k = k = self.k + 1
         (mc, ec), (md, ed) = self._C_parts, self._D
-        scaled = self._scaled
+        scaled = self.precision.dyadic
         pars[self._offset_index] = scaled(k * mc, ec)
         pars[self._phase_index] = scaled(k * md, ed)
 
@@ -113,22 +109,3 @@ class Revolutions:
 
     def _text(self, value: Any) -> str:
         return mpmath.nstr(value, self._dps, strip_zeros=False)
-
-    def _scaled(self, n: int, e: int) -> Any:
-        """n 2ᵉ, rounded once to the run's type (replaced per instance, below, for doubles)."""
-        p = self.precision
-        if p.kind == "quad":
-            return hy.real128(n) * hy.real128(math.ldexp(1.0, e))
-        return hy.real(n, p.bits) * hy.real(math.ldexp(1.0, e), p.bits)
-
-
-def _double_scaled(n: int, e: int) -> float:
-    """n 2ᵉ as a double: float(n) rounds the integer once, the scaling by 2ᵉ is exact."""
-    return math.ldexp(float(n), e)
-
-
-def _dyadic(value: mpmath.mpf) -> tuple[int, int]:
-    """(m, e) with ``value = m 2ᵉ`` exactly."""
-    sign, man, exp, _ = value._mpf_
-    man = int(man)  # an mpz under mpmath's gmpy2 backend, which heyoka's types refuse
-    return (-man if sign else man), int(exp)
