@@ -51,11 +51,15 @@ def assert_same_bits(a, b):
         ("orbit_j2_third_body.toml", None),
         # Extended precision: states and heyoka's double-length time as decimal text.
         ("free_body.toml", "quad"),
+        # The invariable angle Ψ: its turn count is kept by the handler, outside the parameters.
+        ("free_body.toml", "psi"),
     ],
 )
 def test_resumed_run_ends_with_the_bits_of_an_uninterrupted_one(tmp_path, scene, precision):
     data = ch.load_scene(EXAMPLES / scene).to_dict()
-    if precision:
+    if precision == "psi":
+        data["output"]["invariable_angle"] = True
+    elif precision:
         data["integrator"] = {"precision": precision}
         data["output"]["times"] = {"start": 0, "stop": 20, "count": 41}
     sc = ch.Scene.from_dict(data)
@@ -73,6 +77,8 @@ def test_resumed_run_ends_with_the_bits_of_an_uninterrupted_one(tmp_path, scene,
         assert whole.counters["rebasings"] > 0 and len(whole.events["invariable_plane"]) > 0
     if "revolutions" in whole.counters:
         assert whole.counters["revolutions"] > 3
+    if "psi_turns" in whole.counters:
+        assert whole.counters["psi_turns"] > 3
 
 
 def test_stretch_written_after_the_last_snapshot_is_recomputed(tmp_path):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import mpmath
 
@@ -67,7 +68,8 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
     """Convert an input number *exactly*: decimal text at the current precision, floats exactly.
 
     Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float is
-    taken at its exact binary value, never through ``str``.
+    taken at its exact binary value, never through ``str``, and so is a heyoka ``real128`` or
+    ``real`` (a quad or MPFR result's times and states).
     """
     if isinstance(x, bool):
         raise TypeError(f"{name}: expected a number, got a bool")
@@ -76,6 +78,13 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
             value = mpmath.mpf(x.strip())
         except (ValueError, TypeError) as exc:
             raise ValueError(f"{name}: {x!r} is not a number") from exc
+    elif type(x).__module__.startswith("heyoka") and type(x).__name__ in ("real128", "real"):
+        # A quad or MPFR number (a result's time or state): its decimal text round-trips, so
+        # reading it at the number's own bits gives it back exactly.
+        number: Any = x
+        bits = 113 if type(x).__name__ == "real128" else int(number.prec)
+        with mpmath.workprec(bits):
+            value = mpmath.mpf(str(x))
     else:
         try:
             value = mpmath.mpf(x)

@@ -24,6 +24,7 @@ from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
 from . import attitude as att
 from . import equations as eq
+from . import invariable_angle
 from .charts import RodriguesAtlas, kappa_limit
 from .forces import ForceContext, HeavyTop
 from .scene import RigidBody
@@ -67,7 +68,23 @@ def build_model(scene: Scene) -> Model:
         system += list(zip(attitude.variables, attitude.rhs, strict=True))
         initial = initial + list(attitude.initial)
         outputs.update(attitude.outputs)
-        terminal = attitude.terminal
+        terminal = list(attitude.terminal)
+    if invariable_angle.wanted(scene.output.options):
+        if not body.torque_free:
+            raise SceneError(
+                "output.invariable_angle",
+                "Ψ is the angle about the invariable line, which only a torque-free body has: "
+                "remove [forces] or the option",
+            )
+        exact = tuple(exact_fraction(v) for v in body.inertia)
+        psi = invariable_angle.InvariableAngle(
+            pars, prec, exact, tuple(exact_fraction(w) for w in body.rates), len(system)
+        )
+        u = hy.make_vars("psi_reduced")
+        system.append((u, psi.rhs(rates[2], inertia[2])))
+        initial = [*initial, prec.number(0)]
+        outputs["psi"] = psi.psi(u)
+        terminal.append(psi.terminal(u))
 
     monitors, conserved = _monitors(body, inertia, rates, attitude, pars)
     wanted = scene.output.monitors

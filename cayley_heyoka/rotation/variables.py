@@ -17,6 +17,7 @@ _NAMES = {
     "qx": "attitude quaternion, component along space axis x",
     "qy": "attitude quaternion, component along space axis y",
     "qz": "attitude quaternion, component along space axis z",
+    "psi": "Ψ = 2 tan⁻¹ν₀: the angle about the invariable line L (unwrapped, Ψ(0) = 0)",
     "energy": "T − V: the kinetic energy ½(Ap² + Bq² + Cr²) less the force function V",
     "momentum_squared": "|L|² = (Ap)² + (Bq)² + (Cr)², the angular momentum's squared norm",
     "momentum_space": "the angular momentum L in the space frame (a vector)",
