@@ -24,6 +24,7 @@ from typing import Any
 import mpmath
 import numpy as np
 
+from ..core.certificate import exact_values
 from ..core.consistency import (
     CheckOptions,
     CheckReport,
@@ -63,6 +64,14 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
     element_keys = ("upsilon0", "samples", "nodes")
     options.accept(("method", *element_keys), "check of a forced body")
     method = options.choice("method", ("elements", "twin"))
+    if scene.model.formulation == "poisson":
+        if method == "elements" or any(options.text(k) is not None for k in element_keys):
+            raise ValueError(
+                "method: Cayley's element check needs the attitude, which the Euler–Poisson "
+                "reduction does not integrate: use method=twin (the default here)"
+            )
+        options.accept(("method",), "twin check of a reduced body")
+        return check_twin(scene, why="the Euler–Poisson reduction has no attitude to check")
     if method == "twin":
         options.accept(("method",), "twin check of a forced body")
         return check_twin(scene)
@@ -259,6 +268,8 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
     from ..core.engine import run
 
     body = scene.model
+    if body.formulation == "poisson":
+        return _check_poisson_twin(scene, why)
     if body.formulation not in ("rodrigues", "quaternion"):
         raise ValueError("scene: the twin check needs an attitude (formulation 'none' has none)")
     data = scene.to_dict()
@@ -281,6 +292,69 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
     )
     title = (
         f"Rotation ({body.formulation}, {prec.name}) against its {other} twin: "
+        f"{scene.title or 'the scene'} ({len(t)} times over [{t[0]:g}, {t[-1]:g}])"
+    )
+    if why:
+        title += f"; the twin because {why}"
+    return CheckReport(title, tuple(rows), series)
+
+
+#: Rᵀ of a unit quaternion, row j = the body axis j in space axes (γ_j = Σᵢ R_ij uᵢ).
+_MATRIX = (
+    ("1 - 2*(qy*qy + qz*qz)", "2*(qx*qy - qw*qz)", "2*(qx*qz + qw*qy)"),
+    ("2*(qx*qy + qw*qz)", "1 - 2*(qx*qx + qz*qz)", "2*(qy*qz - qw*qx)"),
+    ("2*(qx*qz - qw*qy)", "2*(qy*qz + qw*qx)", "1 - 2*(qx*qx + qy*qy)"),
+)
+
+
+def _check_poisson_twin(scene: Scene, why: str) -> CheckReport:
+    """The Euler–Poisson reduction against its quaternion twin: the rates, and γ = Rᵀu of
+    the twin's attitude (user monitors of the twin, in its precision). γ's bound is 4× the
+    quaternion's (|δγ| ≤ |δR| ≤ 4|δq| for unit quaternions)."""
+    from ..core.engine import run
+    from .poisson import GAMMA, direction
+
+    data = scene.to_dict()
+    data.pop("events", None)
+    data.get("output", {}).pop("events", None)
+    data.pop("monitors", None)
+    data.get("output", {}).pop("monitors", None)
+    own = Scene.from_dict(data)
+    prec = own.integrator.precision
+    u = [str(x) for x in direction(own.model.forces, prec)]
+    data["attitude"] = {"formulation": "quaternion"}
+    data["monitors"] = {
+        name: {
+            "expression": " + ".join(f"({_MATRIX[i][j]})*({u[i]})" for i in range(3)),
+            "conserved": False,
+        }
+        for j, name in enumerate(GAMMA)
+    }
+    a, b = run(own), run(Scene.from_dict(data))
+    errors = {}
+    with mpmath.workdps(prec.dps + 5):
+        for name in ("p", "q", "r", *GAMMA):
+            mine = exact_values(np.ravel(a[name]), prec)
+            theirs = exact_values(np.ravel(b[name]), prec)
+            errors[name] = np.array([float(abs(x - y)) for x, y in zip(mine, theirs, strict=True)])
+    steps = int(a.counters.get("steps", 0)) + int(b.counters.get("steps", 0))
+    tolerance = own.integrator.tolerance
+    K = round_off_scale(steps, prec.epsilon, None if tolerance is None else float(tolerance))
+    t = np.asarray(a.t, dtype=float)
+    s = _variational_sensitivity(own, float(t[-1] - t[0]))
+    rows, series = _attitude_rows(errors, a.variables, t, K, s, steps, prec, "the quaternion twin")
+    rows.append(
+        CheckRow(
+            "γ₁, γ₂, γ₃ − the quaternion twin's Rᵀu",
+            max(float(np.max(errors[n])) for n in GAMMA),
+            4 * K * s["quaternion"] + 10 * prec.epsilon,
+            f"10 ε √N × 4 × the quaternion's sensitivity {s['quaternion']:.3g}; N = {steps}",
+        )
+    )
+    for n in GAMMA:
+        series[f"error_{n}"] = errors[n]
+    title = (
+        f"Rotation (poisson, {prec.name}) against its quaternion twin: "
         f"{scene.title or 'the scene'} ({len(t)} times over [{t[0]:g}, {t[-1]:g}])"
     )
     if why:

@@ -24,14 +24,21 @@ from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
 from . import attitude as att
 from . import equations as eq
-from . import invariable_angle
+from . import invariable_angle, poisson
 from .charts import RodriguesAtlas, kappa_limit
 from .forces import ForceContext, HeavyTop
 from .scene import RigidBody
 
 AXES = ("x1", "y1", "z1")
 RODRIGUES = ("lambda", "mu", "nu")
-MONITORS = ("energy", "momentum_squared", "momentum_space", "momentum_vertical", "orthogonality")
+MONITORS = (
+    "energy",
+    "momentum_squared",
+    "momentum_space",
+    "momentum_vertical",
+    "orthogonality",
+    "direction_norm",
+)
 
 
 def build_model(scene: Scene) -> Model:
@@ -54,6 +61,8 @@ def build_model(scene: Scene) -> Model:
         attitude = _rodrigues(body, prec, pars, rates, q0, momentum, inertia)
     elif body.formulation == "quaternion":
         attitude = _quaternion(body, pars, rates, q0, momentum, inertia)
+    elif body.formulation == "poisson":
+        attitude = _poisson(body, prec, pars, rates, q0, inertia)
 
     torque = attitude.torque if attitude else None
     exact = eq.euler_differences(*(exact_fraction(v) for v in body.inertia))
@@ -99,7 +108,7 @@ def build_model(scene: Scene) -> Model:
     events = _events(scene, body, inertia, rates, attitude, outputs, pars)
     model = Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
     # tan(θ/2) n is infinite at a half-turn in both formulations: the attitude is fine there.
-    model.unbounded = RODRIGUES if attitude else ()
+    model.unbounded = RODRIGUES if attitude and "lambda" in attitude.outputs else ()
     return model
 
 
@@ -118,6 +127,8 @@ class _Attitude:
         # Builds the invariable-plane event functions of a torque-free body (allocating their
         # parameters only when the scene asks for the events).
         self.plane_events: Callable[[], list[Any]] | None = None
+        # The Euler–Poisson reduction's γ: no attitude matrix, only the forces' direction.
+        self.direction: list[Any] | None = None
 
 
 def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
@@ -184,6 +195,21 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     return a
 
 
+def _poisson(body, prec, pars, rates, q0, inertia) -> _Attitude:
+    """The rates and γ = Rᵀu (:mod:`.poisson`): no attitude beyond the forces' direction."""
+    a = _Attitude()
+    u = poisson.direction(body.forces, prec)
+    gamma = list(hy.make_vars(*poisson.GAMMA))
+    a.variables, a.initial = gamma, poisson.initial_direction(q0, u, prec)
+    a.rhs = poisson.kinematics(gamma, rates)
+    zero = hy.expression(prec.number(0))
+    a.potential = force_function(body, poisson.frame(u, gamma, prec), [zero] * 3, inertia, pars)
+    a.torque = poisson.torque(a.potential, gamma)
+    a.outputs = dict(zip(poisson.GAMMA, gamma, strict=True))
+    a.direction = gamma
+    return a
+
+
 def force_function(body: RigidBody, R, rho_total, inertia, pars: ParTable) -> hy.expression:
     """The scene's force function V (the sum of its forces) on the attitude matrix ``R`` and
     the Cayley–Rodrigues parameters ``rho_total`` of the whole attitude."""
@@ -214,7 +240,12 @@ def _monitors(body: RigidBody, inertia, rates, attitude: _Attitude | None, pars:
     conserved = [] if time_dependent else ["energy"]
     if body.torque_free:
         conserved.append("momentum_squared")
-    if attitude:
+    if attitude and attitude.direction is not None:
+        gamma = attitude.direction
+        monitors["momentum_vertical"] = hy.sum([gamma[i] * L[i] for i in range(3)])
+        monitors["direction_norm"] = hy.sum([g * g for g in gamma])
+        conserved += ["momentum_vertical", "direction_norm"]
+    elif attitude:
         R = attitude.R
         monitors["momentum_space"] = att.matvec(R, L)
         if body.torque_free:

@@ -15,7 +15,7 @@ from ..core.scene import check_keys, number, vector
 from . import attitude as att
 from .forces import parse_forces
 
-FORMULATIONS = ("rodrigues", "quaternion", "none")
+FORMULATIONS = ("rodrigues", "quaternion", "none", "poisson")
 #: Smallest ``attitude.max_chart_angle`` (degrees): each re-basing is a terminal event and a
 #: restart of the propagation, so below a few hundred per turn they cost more than the steps;
 #: at 1e-300 every step re-based and the run never ended.
@@ -83,6 +83,12 @@ class RigidBody:
         if formulation not in FORMULATIONS:
             raise SceneError(
                 "attitude.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
+            )
+        if formulation == "poisson" and not forces:
+            raise SceneError(
+                "attitude.formulation",
+                "'poisson' reduces a body whose forces see one fixed direction; this one has no "
+                "force (use 'none' for the rates alone)",
             )
         if formulation == "none" and forces:
             raise SceneError(

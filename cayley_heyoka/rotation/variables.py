@@ -21,7 +21,12 @@ _NAMES = {
     "energy": "T − V: the kinetic energy ½(Ap² + Bq² + Cr²) less the force function V",
     "momentum_squared": "|L|² = (Ap)² + (Bq)² + (Cr)², the angular momentum's squared norm",
     "momentum_space": "the angular momentum L in the space frame (a vector)",
-    "momentum_vertical": "L · up: the angular momentum about the vertical (a heavy top's)",
+    "momentum_vertical": "L · up: the angular momentum about the forces' fixed direction (a heavy "
+    "top's vertical; γ · (Ap, Bq, Cr) in the Euler–Poisson reduction)",
+    "gamma1": "γ₁: the forces' fixed direction (a heavy top's vertical) along body axis 1",
+    "gamma2": "γ₂: the forces' fixed direction along body axis 2",
+    "gamma3": "γ₃: the forces' fixed direction along body axis 3",
+    "direction_norm": "|γ|²: the squared norm of the fixed direction in body axes (exactly 1)",
     "orthogonality": "how far the attitude is from a rotation (the integrated frame's defect)",
 }
 
