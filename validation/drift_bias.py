@@ -182,13 +182,15 @@ SETTINGS = {
 }
 
 
-def settings_table(steps: float, members: int) -> list[str]:
-    """The generic body under each of ``SETTINGS``, both attitude formulations, through
-    bench_conservation's ensembles (the sweeps' batch lanes): which settings random-walk."""
+def settings_table(steps: float, members: int, bodies: tuple[str, ...] = ("generic",)) -> list[str]:
+    """``bodies`` (validation/rotation_cases.py names) under each of ``SETTINGS``, both attitude
+    formulations, through bench_conservation's ensembles (the sweeps' batch lanes): which
+    settings random-walk."""
     import bench_conservation as bc
 
     cases = [
-        bc.Case("free body", formulation, "generic", members, steps, settings)
+        bc.Case("free body", formulation, body, members, steps, settings)
+        for body in bodies
         for settings in SETTINGS.values()
         for formulation in ("quaternion", "rodrigues")
     ]
@@ -196,9 +198,9 @@ def settings_table(steps: float, members: int) -> list[str]:
     floor = bc.estimator_scatter(members, 300)
     names = {v: k for k, v in SETTINGS.items()}
     rows = [
-        "| settings | attitude | quantity | N | RMS / (ε√N) | exponent | shared (median) | "
+        "| body | settings | attitude | quantity | N | RMS / (ε√N) | exponent | shared (median) | "
         "windows | windows shared |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for case, ens in data.items():
         for label in ("energy", "|L|²"):
@@ -212,7 +214,7 @@ def settings_table(steps: float, members: int) -> list[str]:
                 bc._num(f.windows_shared, "windows shared" in marks),
             ]
             rows.append(
-                f"| {names[case.settings]} | {case.formulation} | {bc._cell(label)} | "
+                f"| {case.body} | {names[case.settings]} | {case.formulation} | {bc._cell(label)} | "
                 f"{np.mean(ens.steps):.3g} | " + " | ".join(cells) + " |"
             )
     rows.append(
@@ -234,9 +236,15 @@ def main() -> None:
     parser.add_argument(
         "--settings", action="store_true", help="the package's form under integrator settings"
     )
+    parser.add_argument(
+        "--bodies",
+        nargs="+",
+        default=["generic"],
+        help="with --settings: validation/rotation_cases.py bodies (generic)",
+    )
     args = parser.parse_args()
     if args.settings:
-        print("\n".join(settings_table(args.steps, min(args.members, 16))))
+        print("\n".join(settings_table(args.steps, min(args.members, 16), tuple(args.bodies))))
         return
     if args.cost:
         print(
