@@ -213,10 +213,8 @@ def settings_table(steps: float, members: int, bodies: tuple[str, ...] = ("gener
                 bc._num(f.windows, "windows" in marks),
                 bc._num(f.windows_shared, "windows shared" in marks),
             ]
-            rows.append(
-                f"| {case.body} | {names[case.settings]} | {case.formulation} | {bc._cell(label)} | "
-                f"{np.mean(ens.steps):.3g} | " + " | ".join(cells) + " |"
-            )
+            head = [case.body, names[case.settings], case.formulation, bc._cell(label)]
+            rows.append("| " + " | ".join([*head, f"{np.mean(ens.steps):.3g}", *cells]) + " |")
     rows.append(
         f"\n{members} members 1e-9 apart; for independent walks the median shared fraction stays "
         f"≤ {floor['shared'][0]:.2f} and the windows shared ≤ {floor['windows_shared'][0]:.2f} "
