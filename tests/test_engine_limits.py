@@ -139,7 +139,9 @@ def test_an_interrupt_without_callback_keeps_the_uninterrupted_bits():
     """In the main thread, without a progress callback, heyoka steps in the engine's watch
     thread and a signal poisons the parameters: the rows kept are the uninterrupted run's,
     the parameters are restored, and the next run of the scene is whole."""
-    scene = _scene(output={"times": {"start": "0", "stop": "20000", "count": 801}})
+    # Long enough (~1 s of stepping) that a signal sent halfway lands inside the run on a busy
+    # machine too (at 0.13 s the run sometimes ended before the timer fired).
+    scene = _scene(output={"times": {"start": "0", "stop": "200000", "count": 801}})
     whole = _in_a_thread(scene)  # no signal can reach it
     # Halfway through the stepping: a cold first run's wall time is mostly compilation, which
     # the run below (from the cache) does not repeat.
