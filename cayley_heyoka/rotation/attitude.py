@@ -63,8 +63,8 @@ def rodrigues_to_matrix(rho: Sequence[Any]) -> Matrix:
 def quaternion_to_matrix(q: Sequence[Any]) -> Matrix:
     """Direction cosines from a unit Hamilton quaternion (w, x, y, z).
 
-    The unit norm is assumed, not imposed: for a quaternion whose norm has drifted, ``R`` is
-    not orthogonal, which is what the orthogonality-defect monitor measures.
+    The unit norm is assumed, not imposed: for a quaternion of norm n, this is n² times the
+    rotation's matrix (the quaternion formulation divides by |q|² where it needs the rotation).
     """
     w, x, y, z = q
     ww, xx, yy, zz = w * w, x * x, y * y, z * z

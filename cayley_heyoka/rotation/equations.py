@@ -94,7 +94,9 @@ def cayley_torque(potential: Expr, rho: Sequence[Expr]) -> list[Expr]:
     ]
 
 
-def matrix_torque(potential: Expr, placeholders: Matrix, R: Matrix) -> list[Expr]:
+def matrix_torque(
+    potential: Expr, placeholders: Matrix, R: Matrix, scaled: tuple[Matrix, Expr] | None = None
+) -> list[Expr]:
     """Body torque from a force function of the direction cosines.
 
     ``potential`` is V written in the nine variables ``placeholders`` standing for the entries
@@ -102,21 +104,26 @@ def matrix_torque(potential: Expr, placeholders: Matrix, R: Matrix) -> list[Expr
     ``N = Σᵢ (∂V/∂Rᵢ.) × Rᵢ.`` over the rows of the gradient and of ``R``. This needs no chart
     and is regular at every attitude: it is the quaternion formulation's route to the torque
     and an independent check of Cayley's formula.
+
+    ``scaled = (F, s)`` states ``R = F / s`` (the quaternion's ``R(q)/|q|²``): the crosses then
+    take ``F``'s rows and the sum is divided once, three divisions instead of nine (a gradient
+    that does not depend on R, as a uniform field's, needs no other).
     """
     subs = {str(placeholders[i][j]): R[i][j] for i in range(3) for j in range(3)}
     grad = [
         [hy.subs(hy.diff(potential, placeholders[i][j]), subs) for j in range(3)] for i in range(3)
     ]
+    rows = scaled[0] if scaled else R
     torque = [0, 0, 0]
     for i in range(3):
         gx, gy, gz = grad[i]
-        rx, ry, rz = R[i]
+        rx, ry, rz = rows[i]
         torque = [
             torque[0] + gy * rz - gz * ry,
             torque[1] + gz * rx - gx * rz,
             torque[2] + gx * ry - gy * rx,
         ]
-    return torque
+    return [n / scaled[1] for n in torque] if scaled else torque
 
 
 def kinetic_energy(inertia: Sequence[Expr], rates: Sequence[Expr]) -> Expr:

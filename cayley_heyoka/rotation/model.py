@@ -122,6 +122,9 @@ class _Attitude:
         self.torque: list[Any] | None = None
         self.potential: Any = None
         self.R: list[list[Any]] = []
+        # The integrated frame, when it can drift off the rotations (R(q) with |q| ≠ 1): the
+        # orthogonality monitor measures it. Otherwise R itself.
+        self.frame: list[list[Any]] | None = None
         self.outputs: dict[str, Any] = {}
         self.terminal: list[TerminalSpec] = []
         # Builds the invariable-plane event functions of a torque-free body (allocating their
@@ -173,23 +176,30 @@ def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
 def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     a = _Attitude()
     quat = list(hy.make_vars("qw", "qx", "qy", "qz"))
-    R = att.quaternion_to_matrix(quat)
-    a.variables, a.initial, a.R = quat, list(q0), R
+    # The norm of q is a gauge (q and cq are one attitude; the kinematics is linear in q), but
+    # truncation drifts it steadily in a steady rotation, and R(q) would carry that drift into
+    # L in space and the forces: everything physical reads the normalised attitude.
+    frame = att.quaternion_to_matrix(quat)
+    norm2 = hy.sum([c * c for c in quat])
+    R = [[e / norm2 for e in row] for row in frame]
+    a.variables, a.initial, a.R, a.frame = quat, list(q0), R, frame
     a.rhs = eq.quaternion_kinematics(quat, rates)
     if body.forces:
         names = [[hy.expression(f"R{i + 1}{j + 1}__") for j in range(3)] for i in range(3)]
         V = force_function(body, names, rodrigues_of_matrix(names), inertia, pars)
-        a.torque = eq.matrix_torque(V, names, R)
+        a.torque = eq.matrix_torque(V, names, R, scaled=(frame, norm2))
         a.potential = hy.subs(V, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
     a.outputs = dict(
         zip(("lambda", "mu", "nu"), [quat[i] / quat[0] for i in (1, 2, 3)], strict=True)
     )
-    a.outputs.update(zip(("qw", "qx", "qy", "qz"), quat, strict=True))
+    norm = hy.sqrt(norm2)
+    a.outputs.update(zip(("qw", "qx", "qy", "qz"), [c / norm for c in quat], strict=True))
     if momentum is not None:
 
         def plane_events():
+            # Scaling by |q|² > 0 moves no root: the events need no division.
             g = [pars.add(f"momentum_space[{i}]", momentum[i]) for i in range(3)]
-            return [sum(R[i][j] * g[i] for i in range(3)) for j in range(3)]
+            return [sum(frame[i][j] * g[i] for i in range(3)) for j in range(3)]
 
         a.plane_events = plane_events
     return a
@@ -256,7 +266,8 @@ def _monitors(body: RigidBody, inertia, rates, attitude: _Attitude | None, pars:
             g = monitors["momentum_space"]
             monitors["momentum_vertical"] = sum(up[i] * g[i] for i in range(3))
             conserved.append("momentum_vertical")
-        RtR = att.matmul(att.transpose(R), R)
+        frame = attitude.frame or R
+        RtR = att.matmul(att.transpose(frame), frame)
         defect = [RtR[i][j] - (1 if i == j else 0) for i in range(3) for j in range(3)]
         monitors["orthogonality"] = hy.sqrt(hy.sum([d * d for d in defect]))
     return monitors, tuple(conserved)

@@ -27,7 +27,10 @@ _NAMES = {
     "gamma2": "γ₂: the forces' fixed direction along body axis 2",
     "gamma3": "γ₃: the forces' fixed direction along body axis 3",
     "direction_norm": "|γ|²: the squared norm of the fixed direction in body axes (exactly 1)",
-    "orthogonality": "how far the attitude is from a rotation (the integrated frame's defect)",
+    "orthogonality": (
+        "how far the integrated frame is from a rotation (the quaternion's norm drift; the "
+        "reported attitude is normalised)"
+    ),
 }
 
 
