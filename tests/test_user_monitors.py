@@ -152,6 +152,8 @@ def test_output_monitors_may_list_them_and_must_not_forget_them():
         ({"p": {"expression": "q"}}, "monitors.p", "already an output or monitor"),
         ({"K": {"expression": "p + omega"}}, "monitors.K.expression", "unknown name 'omega'"),
         ({"K": {"expression": "__import__('os')"}}, "monitors.K.expression", "unknown function"),
+        ({"K": {"expression": "p^2"}}, "monitors.K.expression", "a power is written **"),
+        ({"K": {"expression": "p % 2"}}, "monitors.K.expression", "Mod is not allowed; use"),
         ({"K": {"expression": "sin(" * 200 + "p" + ")" * 200}}, "monitors.K.expression", "deep"),
         ({f"K{i}": {"expression": "p"} for i in range(101)}, "monitors", "at most 100"),
     ],

@@ -155,7 +155,10 @@ _OPERATORS = {
 
 def _apply(op: ast.operator, a: hy.expression, b: hy.expression, field: str) -> hy.expression:
     if type(op) not in _OPERATORS:
-        raise SceneError(field, f"operator {type(op).__name__} is not allowed")
+        hint = " (a power is written **, as in Python)" if isinstance(op, ast.BitXor) else ""
+        raise SceneError(
+            field, f"operator {type(op).__name__} is not allowed; use + - * / **{hint}"
+        )
     return _OPERATORS[type(op)](a, b)
 
 
