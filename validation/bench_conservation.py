@@ -535,6 +535,19 @@ def section(data, fits, floors, fold, quick: bool, seconds: float) -> str:
         f"figure outside these (exponents above {FLAG['ensemble']} / {FLAG['windows']}, ~2.5 σ). "
         "Drifts are relative (vectors: |ΔL|/|L(0)|).",
         "",
+        *table_rows(data, fits, floors),
+    ]
+    lines.append("")
+    for title in PLOTS:
+        lines += [f"![{title}](figures/bench_cons_{title.replace(' ', '_').lower()}.png)", ""]
+    lines += cost_table(data)
+    lines += findings(data, fits, floors, fold, quick)
+    return "\n".join(lines)
+
+
+def table_rows(data, fits, floors) -> list[str]:
+    """The Markdown table: one row per case and conserved quantity."""
+    lines = [
         "| system | body | formulation | quantity | M | N | RMS / (ε√N) | exponent | shared at N "
         "| shared (median, last two decades) | windows | windows shared |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -560,12 +573,7 @@ def section(data, fits, floors, fold, quick: bool, seconds: float) -> str:
                 f"| {case.system} | {body} | {case.how} | {_cell(label)} | "
                 f"{case.members} | {N:.3g} | " + " | ".join(row) + " |"
             )
-    lines.append("")
-    for title in PLOTS:
-        lines += [f"![{title}](figures/bench_cons_{title.replace(' ', '_').lower()}.png)", ""]
-    lines += cost_table(data)
-    lines += findings(data, fits, floors, fold, quick)
-    return "\n".join(lines)
+    return lines
 
 
 def cost_table(data: dict[Case, Ensemble]) -> list[str]:

@@ -23,7 +23,7 @@ from report_sections import write_section
 
 HERE = Path(__file__).resolve().parent
 
-SECTIONS = ("users", "work_precision", "ias15", "conservation", "setup")
+SECTIONS = ("users", "work_precision", "ias15", "conservation", "long_runs", "setup")
 
 
 def main(argv: list[str] | None = None) -> int:
