@@ -1,6 +1,8 @@
 """Long-time conservation: Brouwer's law to 10⁸ steps (one case to 10⁹), and no shared drift.
 
 Run:  python validation/benchmarks.py --only conservation [--quick]
+      python validation/bench_conservation.py "heavy top" rodrigues [--members 16] [--steps 1e7]
+          (one case, its table rows printed: to re-measure a case after a change)
 
 Round-off makes a conserved quantity random-walk: its relative drift grows like ε √n after n
 steps (Brouwer's law, log–log slope ½), and runs a hair apart walk *independently*. A bias — a
@@ -733,3 +735,28 @@ def truncation(data, fits) -> list[str]:
         '+20 % time) and leaves the walk: docs/scenes.md, "Long runs: Brouwer\'s law", says '
         "which settings reach the law to how many steps."
     ]
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(description="Measure one case; print its table rows.")
+    parser.add_argument("system", choices=["free body", "Kepler", *EXAMPLES])
+    parser.add_argument("formulation")
+    parser.add_argument("--body", help="free body: a rotation_cases name (default generic)")
+    parser.add_argument("--members", type=int, default=16)
+    parser.add_argument("--steps", type=float, default=1e7)
+    parser.add_argument("--tolerance", help="the integrator's tolerance (default: auto)")
+    args = parser.parse_args(argv)
+    body = args.body or {"free body": "generic", "Kepler": "e = 0.5"}.get(args.system, "")
+    settings = (("tolerance", args.tolerance),) if args.tolerance else ()
+    case = Case(args.system, args.formulation, body, args.members, args.steps, settings)
+    data = measure([case])
+    fits = {c: {label: fit(e, label) for label, _ in c.quantities} for c, e in data.items()}
+    floors = {case.members: estimator_scatter(case.members)}
+    print("\n".join(table_rows(data, fits, floors)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
