@@ -36,6 +36,7 @@ import dataclasses
 import functools
 import math
 import operator
+import sys
 import time
 import tomllib
 from collections.abc import Iterator
@@ -748,10 +749,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=float, default=1e7)
     parser.add_argument("--tolerance", help="the integrator's tolerance (default: auto)")
     args = parser.parse_args(argv)
+    if args.members < 1 or not 1 <= args.steps <= 1e10:
+        parser.error("--members must be >= 1 and --steps in 1 … 1e10")
     body = args.body or {"free body": "generic", "Kepler": "e = 0.5"}.get(args.system, "")
     settings = (("tolerance", args.tolerance),) if args.tolerance else ()
     case = Case(args.system, args.formulation, body, args.members, args.steps, settings)
-    data = measure([case])
+    try:
+        data = measure([case])
+    except ch.SceneError as error:
+        parser.error(str(error))
+    except KeyboardInterrupt:
+        print("interrupted: nothing measured", file=sys.stderr)
+        return 130
     fits = {c: {label: fit(e, label) for label, _ in c.quantities} for c, e in data.items()}
     floors = {case.members: estimator_scatter(case.members)}
     print("\n".join(table_rows(data, fits, floors)))
