@@ -75,6 +75,22 @@ def quaternion_to_matrix(q: Sequence[Any]) -> Matrix:
     ]
 
 
+def quaternion_rotation(q: Sequence[Any]) -> tuple[Matrix, Any]:
+    """The rotation a quaternion of any norm stands for, ``R(q)/|q|²``, and ``|q|²``.
+
+    ``q`` and ``c q`` (c > 0) are one attitude. An integrated quaternion, or one normalised
+    only to a rounding, is not unit: reading this matrix keeps its norm out of what is physical.
+    """
+    squares = [c * c for c in q]
+    if _is_symbolic(q[0]):
+        import heyoka as hy
+
+        norm2 = hy.sum(squares)  # one n-ary sum, as the compiled systems were measured with
+    else:
+        norm2 = sum(squares)
+    return [[e / norm2 for e in row] for row in quaternion_to_matrix(q)], norm2
+
+
 def rodrigues_to_quaternion(rho: Sequence[Any]) -> list[Any]:
     """The unit quaternion with ``w > 0`` of the rotation (λ, μ, ν)."""
     s = _sqrt(kappa(rho))

@@ -151,8 +151,7 @@ def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
     # The base is normalised at each fold, to within a rounding: R(qb) is |qb|² times its
     # rotation, and |qb|² − 1 scaled the forces fold after fold (the heavy top's energy kept
     # a shared part, windows shared 0.33 at 10⁷ steps). Dividing makes the base's norm a gauge.
-    norm2 = hy.sum([c * c for c in qb])
-    R_base = [[e / norm2 for e in row] for row in att.quaternion_to_matrix(qb)]
+    R_base, _ = att.quaternion_rotation(qb)
     R = att.matmul(R_base, att.rodrigues_to_matrix(rho))
     q_total = att.quaternion_multiply(qb, [1, *rho])  # norm √κ: the chart's w is 1/√κ
     rho_total = [q_total[i] / q_total[0] for i in (1, 2, 3)]
@@ -184,8 +183,7 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     # truncation drifts it steadily in a steady rotation, and R(q) would carry that drift into
     # L in space and the forces: everything physical reads the normalised attitude.
     frame = att.quaternion_to_matrix(quat)
-    norm2 = hy.sum([c * c for c in quat])
-    R = [[e / norm2 for e in row] for row in frame]
+    R, norm2 = att.quaternion_rotation(quat)
     a.variables, a.initial, a.R, a.frame = quat, list(q0), R, frame
     a.rhs = eq.quaternion_kinematics(quat, rates)
     if body.forces:
