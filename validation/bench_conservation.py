@@ -82,9 +82,6 @@ FAST_TOP = {
     },
     "attitude": {},
 }
-#: The integrated |γ|² of the Euler–Poisson reduction: a gauge (nothing physical reads it),
-#: shown for what truncation does to it, not judged.
-GAUGE = "|γ|² (gauge)"
 FREE_BODIES = {
     "generic": "generic (moments 1, 2, 3)",
     "separatrix_m10": "separatrix (δ = −1e-10)",
@@ -115,7 +112,7 @@ class Case:
             )
         if self.system in ("heavy top", "fast top"):
             top = (("energy", "energy"), ("L · up", "momentum_vertical"))
-            return (*top, (GAUGE, "direction_norm")) if self.formulation == "poisson" else top
+            return (*top, ("|γ|²", "direction_norm")) if self.formulation == "poisson" else top
         if self.system == "Hamilton":
             return (("energy", "energy"), ("Σ ξ × p", "angular_momentum"))
         return (("energy", "energy"), ("x × v", "angular_momentum"))
@@ -346,7 +343,6 @@ class Fits:
     windows: float
     windows_shared: float
     zero: bool  # exactly conserved to the last bit (nothing to fit)
-    gauge: bool = False  # a gauge's drift: shown, not judged
 
 
 def fit(ens: Ensemble, label: str) -> Fits:
@@ -366,7 +362,6 @@ def fit(ens: Ensemble, label: str) -> Fits:
         windows=slope(lags, np.array(win)),
         windows_shared=float(shared(window_changes(u, WINDOW_LAGS[-1], True))),
         zero=not np.any(rms > 0),
-        gauge=label == GAUGE,
     )
 
 
@@ -403,7 +398,7 @@ def estimator_scatter(members: int, reps: int = 1000) -> dict[str, tuple[float, 
 
 def flagged(f: Fits, floor: dict[str, tuple[float, float]]) -> list[str]:
     """Which of the case's figures are outside what independent walks give."""
-    if f.zero or f.gauge:
+    if f.zero:
         return []
     marks = {
         "ensemble": f.exponent > FLAG["ensemble"],
@@ -727,9 +722,9 @@ def truncation(data, fits) -> list[str]:
     tight = {how: f for how, f in rows[1::2]}
     parts = [
         f"with {WITH[how]}, L · up: {_fig(default[how]['L · up'])}"
-        + (f" (|γ|², a gauge: {_fig(default[how][GAUGE])})" if GAUGE in default[how] else "")
+        + (f" (|γ|²: {_fig(default[how]['|γ|²'])})" if "|γ|²" in default[how] else "")
         + (f"; at 1e-18, L · up: {_fig(tight[how]['L · up'])}" if how in tight else "")
-        + (f", |γ|²: {_fig(tight[how][GAUGE])}" if how in tight and GAUGE in tight[how] else "")
+        + (f", |γ|²: {_fig(tight[how]['|γ|²'])}" if how in tight and "|γ|²" in tight[how] else "")
         for how in default
     ]
     return [

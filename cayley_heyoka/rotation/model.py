@@ -130,10 +130,8 @@ class _Attitude:
         # Builds the invariable-plane event functions of a torque-free body (allocating their
         # parameters only when the scene asks for the events).
         self.plane_events: Callable[[], list[Any]] | None = None
-        # The Euler–Poisson reduction's γ̂ and the integrated |γ|²: no attitude matrix, only
-        # the forces' direction.
+        # The Euler–Poisson reduction's γ: no attitude matrix, only the forces' direction.
         self.direction: list[Any] | None = None
-        self.direction_norm: Any = None
 
 
 def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
@@ -217,14 +215,10 @@ def _poisson(body, prec, pars, rates, q0, inertia) -> _Attitude:
     a.variables, a.initial = gamma, poisson.initial_direction(q0, u, prec)
     a.rhs = poisson.kinematics(gamma, rates)
     zero = hy.expression(prec.number(0))
-    # |γ| is a gauge (:mod:`.poisson`): V, the torque, the monitors and the outputs read γ̂.
-    gamma_hat, norm, norm2 = poisson.unit(gamma)
-    names = [hy.expression(f"{g}__") for g in poisson.GAMMA]
-    V = force_function(body, poisson.frame(u, names, prec), [zero] * 3, inertia, pars)
-    a.torque = poisson.torque(V, names, gamma, norm)
-    a.potential = hy.subs(V, {str(x): g for x, g in zip(names, gamma_hat, strict=True)})
-    a.outputs = dict(zip(poisson.GAMMA, gamma_hat, strict=True))
-    a.direction, a.direction_norm = gamma_hat, norm2
+    a.potential = force_function(body, poisson.frame(u, gamma, prec), [zero] * 3, inertia, pars)
+    a.torque = poisson.torque(a.potential, gamma)
+    a.outputs = dict(zip(poisson.GAMMA, gamma, strict=True))
+    a.direction = gamma
     return a
 
 
@@ -261,9 +255,8 @@ def _monitors(body: RigidBody, inertia, rates, attitude: _Attitude | None, pars:
     if attitude and attitude.direction is not None:
         gamma = attitude.direction
         monitors["momentum_vertical"] = hy.sum([gamma[i] * L[i] for i in range(3)])
-        # The gauge's drift, kept visible as the quaternion's is by orthogonality.
-        monitors["direction_norm"] = attitude.direction_norm
-        conserved.append("momentum_vertical")
+        monitors["direction_norm"] = hy.sum([g * g for g in gamma])
+        conserved += ["momentum_vertical", "direction_norm"]
     elif attitude:
         R = attitude.R
         monitors["momentum_space"] = att.matvec(R, L)

@@ -9,18 +9,10 @@ equations):
     γ̇ = γ × ω,        A ṗ = (B − C) q r + N₁, …,        N = (∂V/∂γ) × γ,
 
 six equations instead of the quaternion's seven or the Rodrigues chart's six and its
-re-basing events (``[attitude] formulation = "poisson"``). Conserved: the energy ``T − V``
-and the area integral ``L · γ`` (``momentum_vertical``: ``N · γ = 0``). The azimuth about
-``u`` is not integrated; a scene that needs the whole attitude uses the quaternion or the
-chart.
-
-The norm of γ is a gauge, as the quaternion's is: Poisson's equations are linear in γ, so
-``c γ`` (c > 0) moves as γ does, and the exact flow keeps ``|γ|²``. Truncation does not: in
-a steady spin, where every step is alike, its error along γ has one sign and ``|γ|²`` drifts
-linearly (a fast Lagrange top, 14 ε√N at 10⁷ steps). So everything physical reads the unit
-direction ``γ̂ = γ/|γ|`` — the force function, the torque ``N = ∇V(γ̂) × γ̂``, the monitors and
-the outputs — and the motion of the rates and γ̂ does not depend on ``|γ|`` at all;
-``direction_norm`` keeps the integrated ``|γ|²``, so the gauge's drift stays visible.
+re-basing events (``[attitude] formulation = "poisson"``). Conserved: the energy ``T − V``,
+``|γ|²`` (``direction_norm``, = 1) and the area integral ``L · γ`` (``momentum_vertical``:
+``N · γ = 0``). The azimuth about ``u`` is not integrated; a scene that needs the whole
+attitude uses the quaternion or the chart.
 
 The force functions are written on the direction cosines; here they are given the matrix
 ``u γᵀ`` (``R_ij = u_i γ_j``), whose every use ``Rᵀu`` is ``|u|² γ = γ`` and whose third row is
@@ -91,13 +83,6 @@ def initial_direction(q0: Sequence[Any], u: Sequence[Any], precision: Precision)
     return [sum(R[i][j] * uu[i] for i in range(3)) for j in range(3)]
 
 
-def unit(gamma: Sequence[Expr]) -> tuple[list[Expr], Expr, Expr]:
-    """``γ̂ = γ/|γ|``, ``|γ|`` and ``|γ|²`` of the integrated γ."""
-    norm2 = hy.sum([g * g for g in gamma])
-    norm = hy.sqrt(norm2)
-    return [g / norm for g in gamma], norm, norm2
-
-
 def frame(u: Sequence[Any], gamma: Sequence[Expr], precision: Precision) -> list[list[Expr]]:
     """The matrix ``u γᵀ`` the force functions are evaluated on."""
     return [[_times(precision, u[i], gamma[j]) for j in range(3)] for i in range(3)]
@@ -119,16 +104,8 @@ def kinematics(gamma: Sequence[Expr], rates: Sequence[Expr]) -> list[Expr]:
     return [g2 * r - g3 * q, g3 * p - g1 * r, g1 * q - g2 * p]
 
 
-def torque(
-    potential: Expr, placeholders: Sequence[Expr], gamma: Sequence[Expr], norm: Expr
-) -> list[Expr]:
-    """``N = ∇V(γ̂) × γ̂``: a virtual rotation δφ of the body moves γ̂ by γ̂ × δφ.
-
-    ``potential`` is V written in the three variables ``placeholders`` standing for γ̂'s
-    components; the cross is taken with the integrated γ and divided once by ``norm = |γ|``
-    (three divisions; a V linear in γ̂, as a heavy top's, has a constant gradient).
-    """
-    subs = {str(x): g / norm for x, g in zip(placeholders, gamma, strict=True)}
-    gx, gy, gz = (hy.subs(hy.diff(potential, x), subs) for x in placeholders)
+def torque(potential: Expr, gamma: Sequence[Expr]) -> list[Expr]:
+    """N = (∂V/∂γ) × γ: a virtual rotation δφ of the body moves γ by γ × δφ."""
+    gx, gy, gz = (hy.diff(potential, g) for g in gamma)
     g1, g2, g3 = gamma
-    return [(gy * g3 - gz * g2) / norm, (gz * g1 - gx * g3) / norm, (gx * g2 - gy * g1) / norm]
+    return [gy * g3 - gz * g2, gz * g1 - gx * g3, gx * g2 - gy * g1]
