@@ -142,6 +142,30 @@ def test_closed_form_values_hold_against_an_independent_evaluation(tmp_path):
         assert len(log.where("z1")) == 0  # r is the dn component: it never vanishes
 
 
+def test_python_floats_are_the_numbers_the_run_integrates(tmp_path):
+    """A scene built in Python with floats: the closed form starts from their binary values, as
+    the run does (it used to take their decimal text, 1e-17 away: p(0) was quad(1/10))."""
+    scene = ch.Scene.from_dict(
+        {
+            "body": {"inertia": [1.0, 1.5, 2.5]},
+            "initial": {"rates": [0.1, 0.2, 0.3], "rodrigues": [0.1, 0.2, -0.3]},
+            "output": {"times": [0.0, 1.0]},
+        }
+    )
+    out = generate_reference(scene, 25, tmp_path / "ref.h5")
+    ref = ch.load_result(out.path)
+    assert out.certified and ref.precision.bits >= 113
+    for name, value in zip("pqr", (0.1, 0.2, 0.3), strict=True):
+        assert _mpf(ref[name][0], ref.precision) == mpmath.mpf(value), name
+    # The attitude too: the scene's binary Rodrigues parameters, as the run reads them.
+    start = scene.model.initial_quaternion(Precision("real", 200))
+    cert = read_certificate(out.path)
+    for k, name in enumerate(("qw", "qx", "qy", "qz")):
+        with mpmath.workprec(200):
+            gap = abs(_mpf(ref[name][0], ref.precision) - mpmath.mpf(str(start[k])))
+        assert gap <= cert["errors"][name][0] + mpmath.mpf(2) ** -190, name
+
+
 def test_workers_give_the_same_bits(tmp_path):
     scene = free_body("30.0", PARALLEL_FROM + 16)
     one = generate_reference(scene, 25, tmp_path / "one.h5", workers=1)

@@ -58,6 +58,8 @@ class Certificate:
         Estimated absolute error of each variable at each output time.
     event_errors
         Estimated absolute error of each recorded event's times.
+    proved
+        The errors are proved bounds (ball arithmetic on a closed form), not estimates.
     scaled
         The largest error, absolute where |value| ≤ 1 and relative above.
     worst
@@ -68,6 +70,7 @@ class Certificate:
     compared_with: str
     errors: dict[str, np.ndarray]
     event_errors: dict[str, np.ndarray] = field(default_factory=dict)
+    proved: bool = False
     scaled: float = 0.0
     worst: tuple[str, float] = ("", 0.0)
 

@@ -32,6 +32,8 @@ class ClosedForm:
     """A scene's closed form: evaluated as the reference, or compared with a run."""
 
     name = ""
+    #: The family's evaluation proves its bounds (ball arithmetic) rather than estimating them.
+    proved = False
 
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
@@ -109,7 +111,7 @@ class ClosedForm:
             metadata={**versions(), "wall_seconds": time.perf_counter() - wall},
         )
         errors = {n: np.array([e[n] for _, e in rows]) for n in job.variables}
-        cert = Certificate("closed form", self.name, errors, event_errors)
+        cert = Certificate("closed form", self.name, errors, event_errors, self.proved)
         return result, worst(cert, variables, np.asarray(grid, dtype=float)), resumed
 
     def _events(self, job: Any, model: Any, prec: Precision, grid: np.ndarray) -> tuple[dict, dict]:

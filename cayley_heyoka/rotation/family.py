@@ -21,6 +21,7 @@ FAMILY = Family(
             ("Crossing", "FreeBodyState", "FreeRigidBody", "free_rigid_body"),
             "cayley_heyoka.rotation.closed_form",
         ),
+        "FreeBodyBounds": "cayley_heyoka.rotation.enclosures",
         "Euler1758": "cayley_heyoka.rotation.euler1758",
         "Cayley1846": "cayley_heyoka.rotation.cayley1846",
     },

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import mpmath
@@ -20,9 +21,14 @@ class FreeBodyJob:
     Attributes
     ----------
     inertia, rates
-        The scene's moments and initial rates, as exact decimal text.
+        The scene's moments and initial rates as it states them (decimal text, or floats at
+        their binary value).
     attitude
-        The initial unit quaternion as text (well beyond ``dps`` digits), or None (rates only).
+        The initial unit quaternion as text (well beyond ``dps`` digits), or None (rates only):
+        the constants' attitude.
+    attitude_given
+        The scene's initial attitude ``(kind, value)`` as it states it, or None: the proved
+        bounds start from it exactly (:func:`.enclosures.attitude_quaternion`).
     dps
         Digits the closed form certifies.
     t0
@@ -33,9 +39,10 @@ class FreeBodyJob:
         The file's precision.
     """
 
-    inertia: tuple[str, str, str]
-    rates: tuple[str, str, str]
+    inertia: tuple[object, object, object]
+    rates: tuple[object, object, object]
     attitude: tuple[str, str, str, str] | None
+    attitude_given: tuple[str, Any] | None
     dps: int
     t0: str
     variables: tuple[str, ...]
@@ -48,7 +55,9 @@ class FreeBodyJob:
     def body(self) -> Any:
         from .closed_form import FreeRigidBody
 
-        return FreeRigidBody(self.inertia, self.rates, attitude=self.attitude, dps=self.dps)
+        body = FreeRigidBody(self.inertia, self.rates, attitude=self.attitude, dps=self.dps)
+        body._attitude_spec = self.attitude_given
+        return body
 
     def evaluator(self) -> Callable[[str], Row]:
         body = self.body()
@@ -57,24 +66,22 @@ class FreeBodyJob:
 
         def at(text: str) -> Row:
             with mpmath.workdps(self.dps + 30):
-                s = body.at(rnd.read(text) - t0)
-                bound = s.error  # the worst of the rates and quaternions, scaled
-                w, x, y, z = s.quaternion
-                exact = {"p": s.p, "q": s.q, "r": s.r, "qw": w, "qx": x, "qy": y, "qz": z}
-                # λ = x/w: an error b in x and w becomes b(1 + |λ|)/|w|.
-                for name, c in (("lambda", x), ("mu", y), ("nu", z)):
-                    exact[name] = c / w if w != 0 else mpmath.inf
+                # The time since the start, exactly (both are numbers of the file's precision).
+                s = body.enclose(exact_rational(rnd.read(text)) - exact_rational(t0))
+                exact = {n: s.values[n] for n in ("p", "q", "r", "qw", "qx", "qy", "qz")}
+                exact.update({n: s.values[n] for n in ("lambda", "mu", "nu")})
                 values, errors = {}, {}
                 for name in self.variables:
                     v = exact[name]
-                    if name in ("lambda", "mu", "nu"):
-                        err = bound * (1 + abs(v)) / abs(w) if w != 0 else mpmath.inf
-                    else:
-                        err = bound * max(1, abs(v))
-                    err += 2 * mpmath.eps * abs(v)  # this division's rounding
                     text_v, written = rnd.write(v)
                     values[name] = text_v
-                    errors[name] = upper(abs(written - v) + err) if mpmath.isfinite(v) else math.inf
+                    if not mpmath.isfinite(v):  # λ, μ, ν at a half-turn
+                        errors[name] = math.inf
+                        continue
+                    # The proved bound, the rounding to the file's precision (exact at these
+                    # digits: both are short binary numbers) and this subtraction's rounding.
+                    gap = abs(written - v)
+                    errors[name] = upper(s.bounds[name] + gap * (1 + 2 * mpmath.eps))
                 inertia = [mpmath.mpf(m) for m in self.inertia]
                 for name in self.monitors:
                     values[name] = self._monitor(name, s, inertia)
@@ -84,15 +91,23 @@ class FreeBodyJob:
 
     def _monitor(self, name: str, s: Any, inertia: Sequence[mpmath.mpf]) -> Any:
         """The monitor of the exact motion at this time, rounded once."""
-        L = [m * w for m, w in zip(inertia, (s.p, s.q, s.r), strict=True)]
+        rates = [s.values[n] for n in "pqr"]
+        L = [m * w for m, w in zip(inertia, rates, strict=True)]
         if name == "energy":
-            value: Any = sum(m * w * w for m, w in zip(inertia, (s.p, s.q, s.r), strict=True)) / 2
+            value: Any = sum(m * w * w for m, w in zip(inertia, rates, strict=True)) / 2
         elif name == "momentum_squared":
             value = sum(x * x for x in L)
         elif name == "momentum_space":
             from .quadratures import quaternion_rotate
 
-            return [self.rounding.write(g)[0] for g in quaternion_rotate(s.quaternion, L)]
+            q = [s.values[n] for n in ("qw", "qx", "qy", "qz")]
+            return [self.rounding.write(g)[0] for g in quaternion_rotate(q, L)]
         else:  # orthogonality: the closed form's attitude is a rotation by construction
             value = mpmath.mpf(0)
         return self.rounding.write(value)[0]
+
+
+def exact_rational(x: mpmath.mpf) -> Fraction:
+    """An mpmath number's exact rational value."""
+    sign, man, exp, _ = x._mpf_  # (mpmath's man_exp drops the sign)
+    return (-1 if sign else 1) * Fraction(int(man)) * Fraction(2) ** int(exp)

@@ -30,7 +30,8 @@ def closed_form(scene: Scene) -> ClosedForm | None:
 
 
 class FreeBodyClosedForm(ClosedForm):
-    name = "FreeRigidBody, Jacobi elliptic functions"
+    name = "FreeRigidBody, Jacobi elliptic functions in Arb balls"
+    proved = True
 
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
         from .free_body_job import FreeBodyJob
@@ -45,9 +46,12 @@ class FreeBodyClosedForm(ClosedForm):
         # computed well beyond the digits asked for.
         quaternion = body.initial_quaternion(Precision("real", int(dps * BITS_PER_DIGIT) + 96))
         return FreeBodyJob(
-            inertia=tuple(str(x) for x in body.inertia),
-            rates=tuple(str(x) for x in body.rates),
+            # As the scene states them: a float is its binary value, as the run reads it (its
+            # decimal text would be another number, 1e-17 away).
+            inertia=tuple(body.inertia),
+            rates=tuple(body.rates),
             attitude=tuple(str(c) for c in quaternion),
+            attitude_given=body.attitude,
             dps=dps,
             t0=t0,
             variables=variables,
@@ -72,7 +76,8 @@ class FreeBodyClosedForm(ClosedForm):
             span = rnd.read(prec.to_text(grid[-1:])[0]) - t0
             for axis in axes:
                 # A zero at the start time is where the run starts, not a crossing it detects.
-                crossings += [c for c in body.crossing_times(axis, 0, span) if c.time > 0]
+                found = body.crossing_times(axis, 0, span, proved=True)
+                crossings += [c for c in found if c.time > 0]
             crossings.sort(key=lambda c: c.time)
             times, errors = [], []
             for c in crossings:
@@ -93,6 +98,7 @@ class FreeBodyClosedForm(ClosedForm):
         import mpmath
 
         from .closed_form import FreeRigidBody
+        from .free_body_job import exact_rational
 
         body = self.scene.model
         dps = digits + 10
@@ -102,6 +108,7 @@ class FreeBodyClosedForm(ClosedForm):
         exact = FreeRigidBody(
             body.inertia, body.rates, attitude=[str(c) for c in quaternion], dps=dps
         )
+        exact._attitude_spec = body.attitude  # the proved bounds start from it exactly
         t = result.t
         names = [n for n in ("p", "q", "r", "qw", "qx", "qy", "qz") if n in result.variables]
         has_rodrigues = "lambda" in result.variables
@@ -114,37 +121,27 @@ class FreeBodyClosedForm(ClosedForm):
         with mpmath.workdps(dps + 10):
             t0 = times[0]
             for k in range(len(t)):
-                s = exact.at(times[k] - t0)
-                bound = max(s.errors.values())
+                s = exact.enclose(exact_rational(times[k]) - exact_rational(t0))
                 got = {n: columns[n][k] for n in cols}
-                exact_q = list(s.quaternion)
+                exact_q = [s.values[n] for n in ("qw", "qx", "qy", "qz")]
                 if "qw" in got:
                     # q and −q are one attitude: compare with the sign the run took.
                     ours = [got["qw"], got["qx"], got["qy"], got["qz"]]
                     if sum(a * b for a, b in zip(ours, exact_q, strict=True)) < 0:
                         exact_q = [-c for c in exact_q]
-                want = {"p": s.p, "q": s.q, "r": s.r}
+                want = {n: s.values[n] for n in ("p", "q", "r", "lambda", "mu", "nu")}
                 want.update(zip(("qw", "qx", "qy", "qz"), exact_q, strict=True))
-                if has_rodrigues:
-                    w = exact_q[0]
-                    want.update(
-                        {"lambda": exact_q[1] / w, "mu": exact_q[2] / w, "nu": exact_q[3] / w}
-                    )
                 for n in cols:
-                    if n in ("lambda", "mu", "nu"):
-                        # λ = x/w: an error b in x and w becomes b(1 + |λ|)/|w|.
-                        bound_n = bound * (1 + abs(want[n])) / abs(exact_q[0])
-                    else:
-                        bound_n = bound * max(1, abs(want[n]))
-                    # The division and the subtraction round at the working precision.
+                    # The proved bound (λ, μ, ν: of the closed form's own quotient, so the
+                    # sign taken for q does not matter), and the subtraction's rounding.
                     rounding = 4 * mpmath.eps * (abs(want[n]) + abs(got[n]))
-                    cols[n].append(upper(abs(got[n] - want[n]) + bound_n + rounding))
+                    cols[n].append(upper(abs(got[n] - want[n]) + s.bounds[n] + rounding))
             event_errors = {}
             log = result.events.get("invariable_plane")
             if log is not None:
                 event_errors["invariable_plane"] = self._crossings(exact, log, times[-1], t0, prec)
         errors = {n: np.array(v) for n, v in cols.items()}
-        cert = Certificate("closed form", self.name, errors, event_errors)
+        cert = Certificate("closed form", self.name, errors, event_errors, self.proved)
         return worst(cert, result.variables, np.asarray(t, dtype=float))
 
     @staticmethod
@@ -154,7 +151,7 @@ class FreeBodyClosedForm(ClosedForm):
         errors = np.zeros(len(log))
         for axis in ("x1", "y1", "z1"):
             ours = [x - t0 for x in exact_values(log.where(axis), prec)]
-            theirs = exact.crossing_times(axis, 0, span)
+            theirs = exact.crossing_times(axis, 0, span, proved=True)
             if len(ours) != len(theirs):
                 raise RuntimeError(
                     f"invariable-plane crossings of {axis}: {len(ours)} recorded, "

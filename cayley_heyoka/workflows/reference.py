@@ -272,8 +272,8 @@ def generate_reference(
             }
         )
         say(
-            f"certificate: {cert.digits():.1f} digits (largest scaled error {cert.scaled:.2e} "
-            f"in {_where(cert)})"
+            f"certificate: {cert.digits():.1f} digits {'proved' if cert.proved else 'estimated'} "
+            f"(largest scaled error {cert.scaled:.2e} in {_where(cert)})"
         )
         if cert.scaled <= 10.0**-digits:
             break
@@ -342,7 +342,8 @@ def _closed_form_reference(
         say(
             f"closed form: {len(result.t)} times in {label(prec)}, "
             f"{time.perf_counter() - t0:.2f} s{note}; certificate: {cert.digits():.1f} digits "
-            f"(largest scaled error {cert.scaled:.2e} in {_where(cert)})"
+            f"{'proved' if cert.proved else 'estimated'} (largest scaled error "
+            f"{cert.scaled:.2e} in {_where(cert)})"
         )
         if cert.scaled <= 10.0**-digits or next_precision(prec).bits > max_bits:
             break
@@ -432,6 +433,7 @@ def _write(
         result.fill(f)
         g = f.create_group("certificate")
         g.attrs["method"] = cert.method
+        g.attrs["proved"] = cert.proved
         g.attrs["compared_with"] = cert.compared_with
         g.attrs["digits_requested"] = digits
         g.attrs["digits_certified"] = cert.digits()
