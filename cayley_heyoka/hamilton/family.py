@@ -14,9 +14,16 @@ FAMILY = Family(
     consistency_check=later("cayley_heyoka.hamilton.projectile_check", "check_hamiltonian"),
     closed_form=later("cayley_heyoka.hamilton.projectile_reference", "closed_form"),
     variables=later("cayley_heyoka.hamilton.variables", "describe"),
-    references=dict.fromkeys(
-        ("projectile_solution", "principal_function", "ProjectileSolution", "PrincipalFunction"),
-        "cayley_heyoka.hamilton.projectile",
-    ),
+    references={
+        **dict.fromkeys(
+            ("projectile_solution", "principal_function"), "cayley_heyoka.hamilton.projectile"
+        ),
+        **dict.fromkeys(
+            ("ProjectileSolution", "PrincipalFunction"), "cayley_heyoka.hamilton.projectile"
+        ),
+        **dict.fromkeys(
+            ("projectile_bounds", "ProjectileBounds"), "cayley_heyoka.hamilton.projectile_bounds"
+        ),
+    },
     memoirs=("hamilton1835",),
 )

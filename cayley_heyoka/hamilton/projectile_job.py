@@ -1,5 +1,5 @@
 """Hamilton's projectile as the closed-form evaluation runs it in worker processes
-(:mod:`cayley_heyoka.core.evaluation`): picklable, and importing mpmath only."""
+(:mod:`cayley_heyoka.core.evaluation`): picklable, importing mpmath and python-flint only."""
 
 from __future__ import annotations
 
@@ -15,11 +15,12 @@ from ..core.evaluation import Rounding, Row, upper
 class ProjectileJob:
     """Hamilton's projectile of a scene (canonical form), evaluated at output times."""
 
-    g: str
-    mu: str
-    nu: str
-    eta: tuple[str, str, str]
-    varpi: tuple[str, str, str]
+    # The scene's numbers as it states them (decimal text, or floats at their binary value).
+    g: object
+    mu: object
+    nu: object
+    eta: tuple[object, object, object]
+    varpi: tuple[object, object, object]
     dps: int
     t0: str
     variables: tuple[str, ...]
@@ -30,28 +31,29 @@ class ProjectileJob:
     MONITORS = ("energy",)
 
     def evaluator(self) -> Callable[[str], Row]:
-        from .projectile import projectile_solution
+        from ..core.balls import ball, exact_mid, exact_rational
+        from .projectile_bounds import projectile_bounds
 
         rnd = self.rounding
         t0 = rnd.read(self.t0)
 
         def at(text: str) -> Row:
             with mpmath.workdps(self.dps + 30):
-                s = projectile_solution(
-                    self.g, self.mu, self.nu, self.eta, self.varpi, rnd.read(text) - t0, self.dps
-                )
-                exact = {f"eta{i + 1}": s.eta[i] for i in range(3)}
-                exact.update({f"varpi{i + 1}": s.varpi[i] for i in range(3)})
-                exact["S"] = s.S
+                # The time since the start, exactly (both are numbers of the file's precision).
+                t = exact_rational(rnd.read(text)) - exact_rational(t0)
+                s = projectile_bounds(self.g, self.mu, self.nu, self.eta, self.varpi, t, self.dps)
                 values, errors = {}, {}
                 for name in self.variables:
-                    v = exact[name]
+                    v = s.values[name]
                     values[name], written = rnd.write(v)
-                    bound = s.errors[name] * max(1, abs(v)) + 2 * mpmath.eps * abs(v)
-                    errors[name] = upper(abs(written - v) + bound)
+                    # The proved bound, the rounding to the file's precision (exact: short
+                    # binary numbers) and this subtraction's rounding.
+                    gap = abs(written - v)
+                    errors[name] = upper(s.bounds[name] + gap * (1 + 2 * mpmath.eps))
                 if "energy" in self.monitors:
-                    g, mu, nu = (mpmath.mpf(c) for c in (self.g, self.mu, self.nu))
-                    eta, varpi = s.eta, s.varpi
+                    g, mu, nu = (exact_mid(ball(c)) for c in (self.g, self.mu, self.nu))
+                    eta = [s.values[f"eta{i}"] for i in (1, 2, 3)]
+                    varpi = [s.values[f"varpi{i}"] for i in (1, 2, 3)]
                     H = (
                         sum(p * p for p in varpi) / 2
                         + g * eta[2]

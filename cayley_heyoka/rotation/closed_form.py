@@ -391,7 +391,8 @@ class FreeRigidBody:
         with mpmath.workdps(self.dps + 20):
             found = self._constants(self.dps + 20).crossing_indices(index, t0, t1)
         if proved:
-            from .enclosures import enclose_crossings, scaled_bound
+            from ..core.balls import scaled_bound
+            from .enclosures import enclose_crossings
 
             times = enclose_crossings(
                 (*self._inputs[:2], self._attitude_spec),

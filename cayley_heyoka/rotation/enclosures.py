@@ -24,13 +24,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from fractions import Fraction
 from typing import Any
 
 import mpmath
 from flint import acb, arb, ctx
 
-from ..core.accuracy import PrecisionNotReached, to_mpf
+from ..core.accuracy import PrecisionNotReached
+from ..core.balls import ball, bound, exact_mid, scaled_bound
 
 __all__ = ["FreeBodyBounds", "enclose", "enclose_crossings"]
 
@@ -63,23 +63,7 @@ class FreeBodyBounds:
         return float(-mpmath.log10(bound / scale))
 
 
-# ---------------------------------------------------------------------------- exact inputs
-def ball(x: object, name: str = "value") -> arb:
-    """An input as a ball holding it exactly: decimal text enclosed, binary numbers exact."""
-    if isinstance(x, str):
-        text = x.strip()
-        to_mpf(text, name)  # the same refusals as the mpmath path (not a number, not finite)
-        try:
-            return arb(text)
-        except (ValueError, TypeError) as exc:  # pragma: no cover - mpmath accepted it
-            raise ValueError(f"{name}: {x!r} is not a number") from exc
-    if isinstance(x, Fraction):
-        return arb(x.numerator) / arb(x.denominator)
-    value = to_mpf(x, name)  # floats, ints, mpf and heyoka's quad and MPFR numbers: exact
-    sign, man, exp, _ = value._mpf_  # (mpmath's man_exp drops the sign)
-    return (-1 if sign else 1) * arb(int(man)) * arb(2) ** int(exp)
-
-
+# ---------------------------------------------------------------------------- the attitude
 def attitude_quaternion(spec: tuple[str, Any]) -> list[arb]:
     """A quaternion of the attitude ``(kind, value)`` as a scene states it (any norm, w ≥ 0):
     ``("quaternion", (w, x, y, z))``, ``("rodrigues", (λ, μ, ν))`` — the quaternion
@@ -117,26 +101,6 @@ def _sign(x: arb, what: str) -> int:
 
 class _Undecided(ArithmeticError):
     """A sign the formulas need is not proved at this precision."""
-
-
-def _exact(x: arb) -> mpmath.mpf:
-    """An exact arb number (a midpoint, a radius) as an mpmath number, exactly."""
-    if x == 0:
-        return mpmath.mpf(0)
-    if not x.is_finite():
-        return mpmath.nan
-    man, exp = x.man_exp()
-    with mpmath.workprec(max(53, int(man).bit_length() + 8)):
-        return mpmath.mpf((int(man), int(exp)))
-
-
-def _mid(x: arb) -> mpmath.mpf:
-    return _exact(x.mid())
-
-
-def _rad(x: arb) -> mpmath.mpf:
-    """The ball's radius (an upper bound Arb keeps exactly, in a few bits)."""
-    return _exact(x.rad())
 
 
 # ---------------------------------------------------------------------------- the solution
@@ -351,7 +315,7 @@ class _Solution:
 
 def _floor(x: arb) -> int:
     """⌊midpoint⌋: a branch index (any index is exact; the midpoint's keeps the ball small)."""
-    return int(mpmath.floor(_mid(x)))
+    return int(mpmath.floor(exact_mid(x)))
 
 
 def _pi_circular(n: arb, chi: arb) -> arb:
@@ -386,17 +350,6 @@ def _attempts(dps: int, extra_digits: int) -> list[int]:
     return out
 
 
-def _scaled(value: mpmath.mpf, bound: mpmath.mpf) -> mpmath.mpf:
-    """A bound relative to the value above 1 and absolute below (as the certificates)."""
-    return bound / max(abs(value), mpmath.mpf(1))
-
-
-def scaled_bound(value: mpmath.mpf, bound: mpmath.mpf) -> mpmath.mpf:
-    """:func:`_scaled` rounded up: still a bound after the division's rounding."""
-    with mpmath.workprec(64):
-        return _scaled(value, bound) * (1 + mpmath.mpf(2) ** -60)
-
-
 def enclose(
     inputs: tuple[Sequence[object], Sequence[object], tuple[str, Any] | None],
     kind: str,
@@ -421,11 +374,11 @@ def enclose(
             except _Undecided as undecided:
                 last = (str(undecided), math.inf)
                 continue
-            values = {name: _mid(state[name]) for name in FIELDS}
-            bounds = {name: _bound(state[name]) for name in FIELDS}
-            tt = _mid(ball(t, "t"))
-        worst = max(TARGETS, key=lambda n: _scaled(values[n], bounds[n]))
-        reached = _scaled(values[worst], bounds[worst])
+            values = {name: exact_mid(state[name]) for name in FIELDS}
+            bounds = {name: bound(state[name]) for name in FIELDS}
+            tt = exact_mid(ball(t, "t"))
+        worst = max(TARGETS, key=lambda n: scaled_bound(values[n], bounds[n]))
+        reached = scaled_bound(values[worst], bounds[worst])
         if reached <= mpmath.mpf(10) ** -dps:
             return FreeBodyBounds(tt, values, bounds, bits)
         last = (worst, float(reached))
@@ -452,14 +405,9 @@ def enclose_crossings(
                 last = (str(undecided), math.inf)
                 continue
             times = [solution.crossing_time(index, j) for j in numbers]
-            out = [(_mid(x), _bound(x)) for x in times]
-        scaled = [_scaled(v, b) for v, b in out]
+            out = [(exact_mid(x), bound(x)) for x in times]
+        scaled = [scaled_bound(v, b) for v, b in out]
         if not scaled or max(scaled) <= mpmath.mpf(10) ** -dps:
             return out
         last = ("a crossing time", float(max(scaled)))
     raise PrecisionNotReached(last[0], dps, last[1], "no tighter bound was proved")
-
-
-def _bound(x: arb) -> mpmath.mpf:
-    """The ball's radius; infinite for a ball Arb could not bound."""
-    return _rad(x) if x.is_finite() else mpmath.inf

@@ -1,16 +1,16 @@
 """The torque-free body as the closed-form evaluation runs it in worker processes
-(:mod:`cayley_heyoka.core.evaluation`): picklable, and importing mpmath only."""
+(:mod:`cayley_heyoka.core.evaluation`): picklable, importing mpmath and python-flint only."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from fractions import Fraction
 from typing import Any
 
 import mpmath
 
+from ..core.balls import exact_rational
 from ..core.evaluation import Rounding, Row, upper
 
 
@@ -105,9 +105,3 @@ class FreeBodyJob:
         else:  # orthogonality: the closed form's attitude is a rotation by construction
             value = mpmath.mpf(0)
         return self.rounding.write(value)[0]
-
-
-def exact_rational(x: mpmath.mpf) -> Fraction:
-    """An mpmath number's exact rational value."""
-    sign, man, exp, _ = x._mpf_  # (mpmath's man_exp drops the sign)
-    return (-1 if sign else 1) * Fraction(int(man)) * Fraction(2) ** int(exp)

@@ -97,8 +97,8 @@ class FreeBodyClosedForm(ClosedForm):
     def certificate(self, result: Any, digits: int) -> Certificate:
         import mpmath
 
+        from ..core.balls import exact_rational
         from .closed_form import FreeRigidBody
-        from .free_body_job import exact_rational
 
         body = self.scene.model
         dps = digits + 10

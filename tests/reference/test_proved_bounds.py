@@ -14,6 +14,7 @@ import mpmath
 import pytest
 from test_closed_form import CASES
 
+from cayley_heyoka.core.balls import ball, bound, exact_mid
 from cayley_heyoka.reference import FreeRigidBody, PrecisionNotReached
 from cayley_heyoka.rotation import enclosures
 
@@ -81,16 +82,16 @@ def test_bounds_hold_next_to_the_separatrix():
 def test_inputs_enter_exactly():
     """A decimal string is one tenth at any precision, a float its binary value: different
     numbers, and each ball holds its own."""
-    tenth, binary = enclosures.ball("0.1"), enclosures.ball(0.1)
-    assert binary.rad() == 0 and binary.mid() == enclosures.ball(Fraction(0.1))
+    tenth, binary = ball("0.1"), ball(0.1)
+    assert binary.rad() == 0 and binary.mid() == ball(Fraction(0.1))
     with mpmath.workdps(60):
-        gap = abs(enclosures._mid(tenth) - mpmath.mpf(1) / 10)
-        assert gap <= enclosures._rad(tenth)
-        assert abs(enclosures._mid(binary) - mpmath.mpf(1) / 10) > enclosures._rad(binary)
+        gap = abs(exact_mid(tenth) - mpmath.mpf(1) / 10)
+        assert gap <= bound(tenth)
+        assert abs(exact_mid(binary) - mpmath.mpf(1) / 10) > bound(binary)
     # Signs survive every kind of number (mpmath's man_exp drops them), and each is exact.
     for x, exact in ((-0.3, mpmath.mpf(-0.3)), (-3, -3), ("-2.5", -2.5), (Fraction(-3, 4), -0.75)):
-        b = enclosures.ball(x)
-        assert b.rad() == 0 and enclosures._mid(b) == exact, x
+        b = ball(x)
+        assert b.rad() == 0 and exact_mid(b) == exact, x
 
 
 def test_float_and_text_inputs_give_their_own_motion():
