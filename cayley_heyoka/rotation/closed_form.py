@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Literal
 import mpmath
 
 from ..core.accuracy import Certified, certify, shown, shown_error, to_mpf
-from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
+from ..core.inputs import MAX_DPS, check_dps, read_inertia, read_rates, read_triple
 from .attitude import (
     quaternion_multiply,
     quaternion_to_rodrigues,
@@ -49,6 +49,9 @@ if TYPE_CHECKING:
 __all__ = ["Crossing", "FreeBodyState", "FreeRigidBody", "free_rigid_body"]
 
 AXES = ("x1", "y1", "z1")
+#: The quadratures (cross-checks) place times up to 10³⁰ periods away (Ψ's time form takes
+#: ~5 s there at 30 digits, 90 s at 10²⁰⁰); the Jacobi route and the proved bounds 10¹⁰⁰⁰.
+QUADRATURE_SPAN_DIGITS = 31
 _SINGULAR_FIELDS = ("nu0", "lambda0", "mu0")
 
 
@@ -266,11 +269,21 @@ class FreeRigidBody:
         )
         return certify(run, self.dps, guard=12 + self._extra + extra, hint=hint)
 
-    def _span_digits(self, t: mpmath.mpf) -> int:
-        """Digits lost in u = Ωt + u₀ over many periods."""
+    def _span_digits(
+        self, t: mpmath.mpf, limit: int = MAX_DPS, what: str = "the closed form"
+    ) -> int:
+        """Digits lost in u = Ωt + u₀ over many periods; refused beyond ``limit`` of them (a
+        time 10²⁰⁰⁰⁰ periods away took minutes in either route, and the quadratures 90 s at
+        10²⁰⁰)."""
         if not mpmath.isfinite(self.period) or self.period == 0:
             return 0
-        return int(mpmath.log10(1 + abs(t) / self.period)) + 1
+        digits = int(mpmath.log10(1 + abs(t) / self.period)) + 1
+        if digits > limit:
+            raise ValueError(
+                f"t: {mpmath.nstr(t, 6)} is 1e{digits - 1} periods away; {what} would need "
+                f"{digits} more digits than dps to place it, beyond its limit of {limit}"
+            )
+        return digits
 
     # -- the state ------------------------------------------------------------------------------
     def at(self, t: object, *, method: Literal["jacobi", "quadrature"] = "jacobi") -> FreeBodyState:
@@ -308,7 +321,12 @@ class FreeRigidBody:
             out.update({f"q{n}": x for n, x in zip("wxyz", q, strict=True)})
             return out
 
-        cert = self._certify(compute, f"state at t={mpmath.nstr(tt, 15)}", self._span_digits(tt))
+        span = (
+            self._span_digits(tt)
+            if method == "jacobi"
+            else self._span_digits(tt, QUADRATURE_SPAN_DIGITS, "the quadrature route")
+        )
+        cert = self._certify(compute, f"state at t={mpmath.nstr(tt, 15)}", span)
         v = cert.values
         return FreeBodyState(
             t=tt,
@@ -441,7 +459,7 @@ class FreeRigidBody:
         cert = self._certify(
             lambda c, w: {"psi": c.psi_quadrature(to_mpf(t, "t"), form, w)},
             f"Ψ by the {form}-form quadrature",
-            self._span_digits(tt),
+            self._span_digits(tt, QUADRATURE_SPAN_DIGITS, "the quadrature route"),
         )
         return cert.values["psi"], cert.errors["psi"]
 

@@ -399,6 +399,19 @@ def test_bad_arguments_of_methods():
         FreeRigidBody(("1", "1", "1.5"), ("1", "1", "1")).at("1", method="quadrature")
 
 
+def test_absurd_spans_are_refused_at_once():
+    """A time 10²⁰⁰⁰⁰ periods away took minutes; the quadratures 90 s at 10²⁰⁰. Refused by
+    name, before any work, in every route."""
+    b = FreeRigidBody(("1", "1.5", "2.5"), ("0.125", "0.25", "1"))
+    for call in (b.at, b.enclose):
+        with pytest.raises(ValueError, match="t: 1.0e\\+20000 is .* periods away"):
+            call("1e20000")
+    with pytest.raises(ValueError, match="quadrature route"):
+        b.psi_by_quadrature("1e40")
+    with pytest.raises(ValueError, match="quadrature route"):
+        b.at("1e40", method="quadrature")
+
+
 def test_exact_separatrix_is_refused():
     # A, B, C = 3, 4, 6 and p₁ = 2r₁: 2T·B − |L|² = Ap²(B − A) + Cr²(B − C) = 0 exactly.
     with pytest.raises(ValueError, match="exactly on the separatrix"):
