@@ -166,6 +166,29 @@ def test_python_floats_are_the_numbers_the_run_integrates(tmp_path):
         assert gap <= cert["errors"][name][0] + mpmath.mpf(2) ** -190, name
 
 
+def test_lambda_at_a_half_turn_is_not_certified(tmp_path, capsys):
+    """Starting a half-turn from the space frame (w = 0), λ, μ, ν are unbounded: the reference
+    says so and is not certified (an ∞/∞ scaled error used to be passed over as NaN)."""
+    scene = ch.Scene.from_dict(
+        {
+            "body": {"inertia": ["1", "1.5", "2.5"]},
+            "initial": {
+                "rates": ["0.125", "0.25", "1"],
+                "matrix": [[-1, 0, 0], [0, -1, 0], [0, 0, 1]],
+            },
+            "output": {"times": ["0", "3"]},
+        }
+    )
+    out = generate_reference(scene, 20, tmp_path / "ref.h5", max_bits=160)
+    assert not out.certified
+    assert out.certificate.worst[0] in ("lambda", "mu", "nu") and out.certificate.worst[1] == 0
+    assert out.certificate.digits_text() == "no digits"
+    cert = read_certificate(out.path)
+    assert not cert["certified"] and cert["digits_certified"] == -np.inf
+    # Away from the half-turn every value is proved.
+    assert np.all(np.asarray(cert["errors"]["p"], dtype=float) < 1e-20)
+
+
 def test_workers_give_the_same_bits(tmp_path):
     scene = free_body("30.0", PARALLEL_FROM + 16)
     one = generate_reference(scene, 25, tmp_path / "one.h5", workers=1)

@@ -144,7 +144,7 @@ def _reference(args: argparse.Namespace) -> int:
     cert = outcome.certificate
     verdict = "certified" if outcome.certified else "NOT CERTIFIED"
     print(
-        f"{verdict}: {cert.digits():.1f} digits of {args.digits} requested "
+        f"{verdict}: {cert.digits_text()} of {args.digits} requested "
         f"({label(outcome.precision)}, {cert.method}: {cert.compared_with})"
     )
     print(f"reference written to {outcome.path}")

@@ -74,14 +74,23 @@ class Certificate:
     scaled: float = 0.0
     worst: tuple[str, float] = ("", 0.0)
 
+    def digits_text(self) -> str:
+        """The digits for a message: "12.3 digits", or "no digits" for an unbounded error."""
+        digits = self.digits()
+        return f"{digits:.1f} digits" if math.isfinite(digits) or digits > 0 else "no digits"
+
     def digits(self) -> float:
         """Decimal digits certified: -log10 of the largest scaled error."""
         return math.inf if self.scaled == 0 else -math.log10(self.scaled)
 
 
 def _scaled(values: np.ndarray, errors: np.ndarray) -> np.ndarray:
-    mag = np.abs(np.asarray(values, dtype=float))
-    return errors / np.maximum(mag, 1.0)
+    """Errors relative above 1 and absolute below; an unbounded error (an infinite value's,
+    λ at a half-turn) stays infinite instead of becoming ∞/∞ and being passed over."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        mag = np.abs(np.asarray(values, dtype=float))
+        scaled = errors / np.maximum(mag, 1.0)
+    return np.where(np.isnan(scaled) | np.isinf(errors), np.inf, scaled)
 
 
 def worst(cert: Certificate, values: dict[str, np.ndarray], t: np.ndarray) -> Certificate:

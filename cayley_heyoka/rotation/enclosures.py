@@ -313,6 +313,18 @@ class _Solution:
         return [c * f, (s * Ap + c * Bq) / g, (s * Bq - c * Ap) / g, s * f]
 
 
+def _at_a_half_turn(values: dict[str, mpmath.mpf], bounds: dict[str, mpmath.mpf]) -> None:
+    """λ, μ, ν where the ball of w holds 0 (a half-turn, or next to one): Arb's quotient is
+    unbounded; the values are the midpoints' quotient (±∞ where w is exactly 0, as the mpmath
+    route gives), their bounds infinite."""
+    w = values["qw"]
+    for name, c in (("lambda", "qx"), ("mu", "qy"), ("nu", "qz")):
+        if not mpmath.isfinite(values[name]) or not mpmath.isfinite(bounds[name]):
+            with mpmath.workprec(max(mpmath.mp.prec, 256)):
+                values[name] = values[c] / w if w != 0 else mpmath.inf
+            bounds[name] = mpmath.inf
+
+
 def _floor(x: arb) -> int:
     """⌊midpoint⌋: a branch index (any index is exact; the midpoint's keeps the ball small)."""
     return int(mpmath.floor(exact_mid(x)))
@@ -376,6 +388,7 @@ def enclose(
                 continue
             values = {name: exact_mid(state[name]) for name in FIELDS}
             bounds = {name: bound(state[name]) for name in FIELDS}
+            _at_a_half_turn(values, bounds)
             tt = exact_mid(ball(t, "t"))
         worst = max(TARGETS, key=lambda n: scaled_bound(values[n], bounds[n]))
         reached = scaled_bound(values[worst], bounds[worst])

@@ -272,7 +272,7 @@ def generate_reference(
             }
         )
         say(
-            f"certificate: {cert.digits():.1f} digits {'proved' if cert.proved else 'estimated'} "
+            f"certificate: {cert.digits_text()} {'proved' if cert.proved else 'estimated'} "
             f"(largest scaled error {cert.scaled:.2e} in {_where(cert)})"
         )
         if cert.scaled <= 10.0**-digits:
@@ -341,7 +341,7 @@ def _closed_form_reference(
         note = f" (resumed after {resumed} chunks)" if resumed else ""
         say(
             f"closed form: {len(result.t)} times in {label(prec)}, "
-            f"{time.perf_counter() - t0:.2f} s{note}; certificate: {cert.digits():.1f} digits "
+            f"{time.perf_counter() - t0:.2f} s{note}; certificate: {cert.digits_text()} "
             f"{'proved' if cert.proved else 'estimated'} (largest scaled error "
             f"{cert.scaled:.2e} in {_where(cert)})"
         )
@@ -421,7 +421,13 @@ def _where(cert: Certificate) -> str:
     """Where the largest scaled error is: a variable at an output time, or an event (whose
     error is of its time, at no output time)."""
     name, at = cert.worst
-    return f"{name} at t = {at:.6g}" if math.isfinite(at) else name
+    where = f"{name} at t = {at:.6g}" if math.isfinite(at) else name
+    if not math.isfinite(cert.scaled) and name in ("lambda", "mu", "nu"):
+        where += (
+            ": unbounded, as λ, μ, ν are where the body is a half-turn from the space frame "
+            "(w = 0); choose output times away from it"
+        )
+    return where
 
 
 def _write(
