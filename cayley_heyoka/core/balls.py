@@ -10,6 +10,8 @@ rounding.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from fractions import Fraction
 
 import mpmath
@@ -17,7 +19,15 @@ from flint import arb
 
 from .accuracy import to_mpf
 
-__all__ = ["ball", "bound", "exact_mid", "exact_rational", "scaled_bound"]
+__all__ = [
+    "Enclosure",
+    "ball",
+    "bound",
+    "exact_mid",
+    "exact_rational",
+    "scaled_bound",
+    "to_ball",
+]
 
 
 def ball(x: object, name: str = "value") -> arb:
@@ -28,9 +38,15 @@ def ball(x: object, name: str = "value") -> arb:
         return arb(text)
     if isinstance(x, Fraction):
         return arb(x.numerator) / arb(x.denominator)
-    value = to_mpf(x, name)  # floats, ints, mpf and heyoka's quad and MPFR numbers: exact
+    if isinstance(x, mpmath.mpf):  # as it is: to_mpf would round it to mpmath's precision
+        if not mpmath.isfinite(x):
+            raise ValueError(f"{name} must be finite, got {x!r}")
+        value = x
+    else:  # floats, ints and heyoka's quad and MPFR numbers: exact
+        value = to_mpf(x, name)
     sign, man, exp, _ = value._mpf_  # (mpmath's man_exp drops the sign)
-    return (-1 if sign else 1) * arb(int(man)) * arb(2) ** int(exp)
+    # (mantissa, exponent): exact at any working precision.
+    return arb((-int(man) if sign else int(man), int(exp)))
 
 
 def _exact(x: arb) -> mpmath.mpf:
@@ -65,3 +81,27 @@ def exact_rational(x: mpmath.mpf) -> Fraction:
     """An mpmath number's exact rational value (a time difference without rounding)."""
     sign, man, exp, _ = x._mpf_  # (mpmath's man_exp drops the sign)
     return (-1 if sign else 1) * Fraction(int(man)) * Fraction(2) ** int(exp)
+
+
+def to_ball(value: mpmath.mpf, radius: mpmath.mpf) -> arb:
+    """The ball ``[value ± radius]`` again, exactly (both are short binary numbers)."""
+    return ball(value) + arb(0, ball(radius))
+
+
+@dataclass(frozen=True)
+class Enclosure:
+    """Values with proved bounds: the exact value of ``name`` lies within ``bounds[name]`` of
+    ``values[name]`` (the midpoint of an Arb ball, an mpmath number). ``bits`` is the working
+    precision that proved them."""
+
+    values: dict[str, mpmath.mpf]
+    bounds: dict[str, mpmath.mpf]
+    bits: int
+
+    def digits(self, name: str) -> float:
+        """Decimal digits proved for ``name``, relative (absolute where the value is below 1)."""
+        radius = self.bounds[name]
+        if radius == 0:
+            return math.inf
+        scale = max(abs(self.values[name]), mpmath.mpf(1))
+        return float(-mpmath.log10(radius / scale))

@@ -20,7 +20,7 @@ import mpmath
 from flint import arb, ctx
 
 from ..core.accuracy import PrecisionNotReached
-from ..core.balls import ball, bound, exact_mid
+from ..core.balls import Enclosure, ball, bound, exact_mid
 from ..core.inputs import check_dps
 
 __all__ = ["ProjectileBounds", "projectile_bounds"]
@@ -30,13 +30,9 @@ GROWTH, MAX_GROWTH = 2, 16
 
 
 @dataclass(frozen=True)
-class ProjectileBounds:
-    """The projectile at one time: ``values[name]`` (midpoints, mpmath numbers) and
-    ``bounds[name]`` (proved bounds of their errors) for ``eta1 … eta3, varpi1 … varpi3, S``."""
-
-    values: dict[str, mpmath.mpf]
-    bounds: dict[str, mpmath.mpf]
-    bits: int
+class ProjectileBounds(Enclosure):
+    """The projectile at one time, each value with a proved bound (:class:`Enclosure`):
+    ``eta1 … eta3, varpi1 … varpi3, S``."""
 
 
 def _x_minus_sin(x: arb) -> arb:

@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import mpmath
 
 from ..core.accuracy import PrecisionNotReached, certify, shown, shown_error, to_mpf
+from ..core.balls import Enclosure
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from ..core.vectors import cross, dot
 from .attitude import matvec, rodrigues_to_matrix
@@ -351,6 +352,15 @@ class Cayley1846:
 
     def _motion(self, dps: int) -> RegularisedRates:
         return self.constants(dps).motion
+
+    def enclose(self, t) -> Enclosure:
+        """The state at time ``t`` with *proved* bounds: the fields of :class:`Cayley1846State`
+        (the quaternion as ``quaternion_w`` … ``quaternion_z``) as ``values[name]`` and
+        ``bounds[name]``, from Cayley's 1843 solution in Arb balls (:mod:`.classical_bounds`;
+        the angle's whole turns from :meth:`at`)."""
+        from .classical_bounds import cayley1846_bounds
+
+        return cayley1846_bounds(self, t)
 
     def at(self, t) -> Cayley1846State:
         """The state at time t (any sign), with an error estimate per quantity.

@@ -30,7 +30,7 @@ import mpmath
 from flint import acb, arb, ctx
 
 from ..core.accuracy import PrecisionNotReached
-from ..core.balls import ball, bound, exact_mid, scaled_bound
+from ..core.balls import Enclosure, ball, bound, exact_mid, scaled_bound
 
 __all__ = ["FreeBodyBounds", "enclose", "enclose_crossings"]
 
@@ -39,28 +39,15 @@ FIELDS = ("p", "q", "r", "phi", "psi", "qw", "qx", "qy", "qz", "lambda", "mu", "
 
 
 @dataclass(frozen=True)
-class FreeBodyBounds:
-    """The free body at one time, each value with a proved bound.
+class FreeBodyBounds(Enclosure):
+    """The free body at time ``t``, each value with a proved bound (:class:`Enclosure`).
 
-    ``values[name]`` is the ball's midpoint (an mpmath number) and ``bounds[name]`` the proved
-    bound of its error: the exact value lies in ``[value − bound, value + bound]``. ``bits`` is
-    the working precision that proved them. Fields: ``p, q, r`` (body rates), ``phi`` (Cayley's
-    φ), ``psi`` (Ψ = 2 tan⁻¹ν₀, unwrapped) and the unit quaternion ``qw, qx, qy, qz`` of the
-    body in the space frame.
+    Fields: ``p, q, r`` (body rates), ``phi`` (Cayley's φ), ``psi`` (Ψ = 2 tan⁻¹ν₀, unwrapped),
+    the unit quaternion ``qw, qx, qy, qz`` of the body in the space frame and its
+    ``lambda, mu, nu`` (unbounded at a half-turn).
     """
 
-    t: mpmath.mpf
-    values: dict[str, mpmath.mpf]
-    bounds: dict[str, mpmath.mpf]
-    bits: int
-
-    def digits(self, name: str) -> float:
-        """Decimal digits proved for ``name``, relative (absolute where the value is below 1)."""
-        bound = self.bounds[name]
-        if bound == 0:
-            return math.inf
-        scale = max(abs(self.values[name]), mpmath.mpf(1))
-        return float(-mpmath.log10(bound / scale))
+    t: mpmath.mpf = mpmath.mpf(0)
 
 
 # ---------------------------------------------------------------------------- the attitude
@@ -393,7 +380,7 @@ def enclose(
         worst = max(TARGETS, key=lambda n: scaled_bound(values[n], bounds[n]))
         reached = scaled_bound(values[worst], bounds[worst])
         if reached <= mpmath.mpf(10) ** -dps:
-            return FreeBodyBounds(tt, values, bounds, bits)
+            return FreeBodyBounds(values, bounds, bits, tt)
         last = (worst, float(reached))
     raise PrecisionNotReached(last[0], dps, last[1], "no tighter bound was proved")
 

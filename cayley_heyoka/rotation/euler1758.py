@@ -37,6 +37,7 @@ from typing import NamedTuple
 import mpmath
 
 from ..core.accuracy import PrecisionNotReached, certify, shown, shown_error, to_mpf
+from ..core.balls import Enclosure
 from ..core.inputs import check_dps, read_inertia, read_rates, read_triple
 from ..core.vectors import cross
 
@@ -682,6 +683,14 @@ class Euler1758:
         return certify(
             lambda d: {"T": 4 * self.constants(d).motion.quarter_period}, self.dps, guard=GUARD
         ).values["T"]
+
+    def enclose(self, t) -> Enclosure:
+        """The state at time ``t`` with *proved* bounds: the fields of :class:`EulerState` as
+        ``values[name]`` and ``bounds[name]``, from Cayley's 1843 solution in Arb balls
+        (:mod:`.classical_bounds`; the angles' whole turns from :meth:`at`)."""
+        from .classical_bounds import euler1758_bounds
+
+        return euler1758_bounds(self, t)
 
     def at(self, t) -> EulerState:
         """The state at time t (any sign), with an error estimate per quantity.
