@@ -48,6 +48,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any, NamedTuple
 
 import mpmath
 
@@ -212,14 +213,27 @@ def _run(compute: Callable[[int], Mapping[str, mpmath.mpf]], dps: int, extra: in
 # -- the motion from its initial data ---------------------------------------------------------
 
 
-def _motion(g, mu, nu, e, p, t) -> dict[str, mpmath.mpf]:
-    """η(t), ϖ(t) (113.)–(114.) and S(t; e, p), at the current precision."""
-    out: dict[str, mpmath.mpf] = {}
-    S = mpmath.mpf(0)
+class Elementary(NamedTuple):
+    """The functions :func:`motion` needs, for one kind of number."""
+
+    cos: Callable[[Any], Any]
+    sinc: Callable[[Any], Any]  # sin x / x
+    x_minus_sin: Callable[[Any], Any]  # (x − sin x)/x³
+    zero: Any
+
+
+MPMATH = Elementary(mpmath.cos, _sinc, _x_minus_sin, mpmath.mpf(0))
+
+
+def motion(g, mu, nu, e, p, t, f: Elementary = MPMATH) -> dict[str, Any]:
+    """η(t), ϖ(t) (113.)–(114.) and S(t; e, p), at the current precision, in the numbers of
+    ``f`` (mpmath's here; Arb balls in :mod:`.projectile_bounds`)."""
+    out: dict[str, Any] = {}
+    S = f.zero
     # Horizontal: η = ec + ps, ϖ = pc − μ²es with c = cos μt, s = sin μt/μ;
     # ½(ηϖ − ep) = ½[(p² − μ²e²)cs − 2μ²eps²] since c² − 1 = −μ²s².
     x = mu * t
-    c, s = mpmath.cos(x), t * _sinc(x)
+    c, s = f.cos(x), t * f.sinc(x)
     m2 = mu * mu
     for i in (0, 1):
         out[f"eta{i + 1}"] = e[i] * c + p[i] * s
@@ -228,9 +242,9 @@ def _motion(g, mu, nu, e, p, t) -> dict[str, mpmath.mpf]:
     # Vertical: with v = (1 − cos νt)/ν² = ½t²(sin ½νt / ½νt)² and q = ν²e₃ + g,
     # η₃ = e₃c + p₃s − gv, ϖ₃ = p₃c − qs, ∫₀ᵗη₃ = e₃s + p₃v − gw, w = t³(x − sin x)/x³.
     x = nu * t
-    c, s = mpmath.cos(x), t * _sinc(x)
-    v = t * t * _sinc(x / 2) ** 2 / 2
-    w = t**3 * _x_minus_sin(x)
+    c, s = f.cos(x), t * f.sinc(x)
+    v = t * t * f.sinc(x / 2) ** 2 / 2
+    w = t**3 * f.x_minus_sin(x)
     n2 = nu * nu
     e3, p3 = e[2], p[2]
     q = n2 * e3 + g
@@ -298,7 +312,7 @@ def projectile_solution(
 
     def compute(_wdps: int) -> dict[str, mpmath.mpf]:
         r = _read_parameters(g, mu, nu, t)
-        return _motion(r["g"], r["mu"], r["nu"], read_triple(e, "e"), read_triple(p, "p"), r["t"])
+        return motion(r["g"], r["mu"], r["nu"], read_triple(e, "e"), read_triple(p, "p"), r["t"])
 
     cert: Certified = _run(compute, dps, extra, "projectile_solution")
     v = cert.values

@@ -1,6 +1,6 @@
 """Hamilton's projectile (113.)–(114.) and S along the motion, in Arb balls: proved bounds.
 
-The formulas are :func:`.projectile._motion`'s (symbols there), evaluated in ball arithmetic
+The formulas are :func:`.projectile.motion`'s (symbols there), evaluated in ball arithmetic
 (python-flint): every input enters exactly (decimal text enclosed, binary numbers exact), and
 each value is a ball that provably holds the exact value. The even functions that cancel near
 0 — sin x / x and (x − sin x)/x³ — are Arb's ``sinc`` and, for |x| < ½, the alternating series
@@ -22,6 +22,7 @@ from flint import arb, ctx
 from ..core.accuracy import PrecisionNotReached
 from ..core.balls import Enclosure, ball, bound, exact_mid
 from ..core.inputs import check_dps
+from .projectile import Elementary, motion
 
 __all__ = ["ProjectileBounds", "projectile_bounds"]
 
@@ -51,33 +52,11 @@ def _x_minus_sin(x: arb) -> arb:
     return (x - x.sin()) / (x * x * x)
 
 
+ARB = Elementary(lambda x: x.cos(), lambda x: x.sinc(), _x_minus_sin, arb(0))
+
+
 def _motion(g: arb, mu: arb, nu: arb, e: Sequence[arb], p: Sequence[arb], t: arb) -> list[arb]:
-    out: dict[str, arb] = {}
-    S = arb(0)
-    x = mu * t
-    c, s = x.cos(), t * x.sinc()
-    m2 = mu * mu
-    for i in (0, 1):
-        out[f"eta{i + 1}"] = e[i] * c + p[i] * s
-        out[f"varpi{i + 1}"] = p[i] * c - m2 * e[i] * s
-        S += ((p[i] ** 2 - m2 * e[i] ** 2) * c * s - 2 * m2 * e[i] * p[i] * s * s) / 2
-    x = nu * t
-    c, s = x.cos(), t * x.sinc()
-    v = t * t * (x / 2).sinc() ** 2 / 2
-    w = t**3 * _x_minus_sin(x)
-    n2 = nu * nu
-    e3, p3 = e[2], p[2]
-    q = n2 * e3 + g
-    out["eta3"] = e3 * c + p3 * s - g * v
-    out["varpi3"] = p3 * c - q * s
-    S += (
-        (p3 * p3 - e3 * q) * c * s
-        - 2 * n2 * e3 * p3 * s * s
-        - g * p3 * (s * s + v * c)
-        + g * q * v * s
-        - g * (e3 * s + p3 * v - g * w)
-    ) / 2
-    out["S"] = S
+    out = motion(g, mu, nu, e, p, t, ARB)
     return [out[n] for n in NAMES]
 
 

@@ -31,6 +31,7 @@ from flint import acb, arb, ctx
 
 from ..core.accuracy import PrecisionNotReached
 from ..core.balls import Enclosure, ball, bound, exact_mid, scaled_bound
+from .attitude import quaternion_multiply
 
 __all__ = ["FreeBodyBounds", "enclose", "enclose_crossings"]
 
@@ -125,7 +126,7 @@ class _Solution:
             norm = sum((x * x for x in qa), arb(0)).sqrt()
             qa = [x / norm for x in qa]
             w, x, y, z = self.q0_start
-            self.outer = _multiply(qa, [w, -x, -y, -z])
+            self.outer = quaternion_multiply(qa, [w, -x, -y, -z])
 
     # -- three distinct moments: Jacobi's functions (§7.1) ------------------------------------
     def _jacobi_constants(self) -> None:
@@ -264,7 +265,7 @@ class _Solution:
         else:
             w, phi, psi = list(self.w1), arb(0), self._steady_rate(self.w1) * t
         q0 = self.invariable_quaternion(psi, *w)
-        q = _multiply(self.outer, q0)
+        q = quaternion_multiply(self.outer, q0)
         out = dict(zip("pqr", w, strict=True))
         out.update(phi=phi, psi=psi)
         out.update(zip(("qw", "qx", "qy", "qz"), q, strict=True))
@@ -321,17 +322,6 @@ def _pi_circular(n: arb, chi: arb) -> arb:
     """Π(n; χ | 0) = arctan(√(1 − n) tan χ)/√(1 − n) for |χ| ≤ π/2."""
     root = (1 - n).sqrt()
     return arb.atan2(root * chi.sin(), chi.cos()) / root
-
-
-def _multiply(a: Sequence[Any], b: Sequence[Any]) -> list[Any]:
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return [
-        aw * bw - ax * bx - ay * by - az * bz,
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-    ]
 
 
 #: Working precision grows by this factor per attempt, up to ``MAX_GROWTH`` × the first.
