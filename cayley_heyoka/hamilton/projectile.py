@@ -188,7 +188,7 @@ def _xcot(x: mpmath.mpf) -> mpmath.mpf:
 # -- reading the inputs -----------------------------------------------------------------------
 
 
-def _read_parameters(g: object, mu: object, nu: object, t: object) -> dict[str, mpmath.mpf]:
+def read_parameters(g: object, mu: object, nu: object, t: object) -> dict[str, mpmath.mpf]:
     """g, μ, ν, t at the current precision: finite, μ, ν ≥ 0; errors name the parameter."""
     values = {name: to_mpf(x, name) for name, x in (("g", g), ("mu", mu), ("nu", nu), ("t", t))}
     for name in ("mu", "nu"):
@@ -305,13 +305,13 @@ def projectile_solution(
     """
     dps = check_dps(dps)
     with mpmath.workdps(dps + 20):
-        par = _read_parameters(g, mu, nu, t)
+        par = read_parameters(g, mu, nu, t)
         read_triple(e, "e")
         read_triple(p, "p")
         extra = _span_digits(par["mu"] * par["t"], par["nu"] * par["t"])
 
     def compute(_wdps: int) -> dict[str, mpmath.mpf]:
-        r = _read_parameters(g, mu, nu, t)
+        r = read_parameters(g, mu, nu, t)
         return motion(r["g"], r["mu"], r["nu"], read_triple(e, "e"), read_triple(p, "p"), r["t"])
 
     cert: Certified = _run(compute, dps, extra, "projectile_solution")
@@ -422,7 +422,7 @@ def principal_function(
     dps = check_dps(dps)
     probe = dps + 30
     with mpmath.workdps(probe):
-        par = _read_parameters(g, mu, nu, t)
+        par = read_parameters(g, mu, nu, t)
         read_triple(eta, "eta")
         read_triple(e, "e")
         if par["t"] == 0:
@@ -444,7 +444,7 @@ def principal_function(
         extra += _span_digits(par["mu"] * par["t"], par["nu"] * par["t"])
 
     def compute(_wdps: int) -> dict[str, mpmath.mpf]:
-        r = _read_parameters(g, mu, nu, t)
+        r = read_parameters(g, mu, nu, t)
         return _principal(
             r["g"], r["mu"], r["nu"], read_triple(eta, "eta"), read_triple(e, "e"), r["t"]
         )

@@ -21,8 +21,8 @@ from flint import arb, ctx
 
 from ..core.accuracy import PrecisionNotReached
 from ..core.balls import Enclosure, ball, bound, exact_mid
-from ..core.inputs import check_dps
-from .projectile import Elementary, motion
+from ..core.inputs import check_dps, read_triple
+from .projectile import Elementary, motion, read_parameters
 
 __all__ = ["ProjectileBounds", "projectile_bounds"]
 
@@ -72,6 +72,10 @@ def projectile_bounds(
     """:func:`.projectile.projectile_solution` with proved bounds (same parameters, read the
     same way and checked there first), each below ``10**-dps`` (relative above 1)."""
     dps = check_dps(dps)
+    with mpmath.workdps(dps + 20):  # the mpmath route's checks and messages, before any work
+        read_parameters(g, mu, nu, t)
+        read_triple(e, "e")
+        read_triple(p, "p")
     first = int(dps * 3.33) + 64
     # Rounding x = ωt costs log₁₀|x| digits in cos x and sin x: the first attempt adds them.
     with ctx.workprec(64):

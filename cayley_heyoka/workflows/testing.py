@@ -64,9 +64,9 @@ def assert_trajectory_close(
     exceed ``atol + rtol * |reference| + bound``, where ``bound`` is the certified absolute error
     bound of the reference at that time (the ``certificate`` group of a file written by
     ``cayley-heyoka reference``; zero when absent) — a proved bound for a closed-form reference
-    (the free body, the projectile: ``certificate.proved``), an estimate otherwise. Differences are computed in the higher of
-    the two precisions, from the exact values, so a quad run compared with a quad reference
-    resolves differences far below double's ε.
+    (the free body, the projectile: ``certificate.proved``), an estimate otherwise. Differences
+    are computed in the higher of the two precisions, from the exact values, so a quad run
+    compared with a quad reference resolves differences far below double's ε.
 
     Parameters
     ----------

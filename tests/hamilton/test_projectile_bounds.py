@@ -66,3 +66,18 @@ def test_a_bound_that_cannot_be_proved_is_reported(monkeypatch) -> None:
     monkeypatch.setattr(module, "MAX_GROWTH", 0)
     with pytest.raises(PrecisionNotReached):
         bounds(CASES["R1"], 30)
+
+
+@pytest.mark.parametrize(
+    ("change", "pattern"),
+    [
+        ({"mu": "-0.3"}, "mu: the frequency must be >= 0"),
+        ({"e": ("0", "0")}, "e: expected a sequence of three numbers"),
+        ({"p": "abc"}, "p: expected a sequence of three numbers"),
+        ({"t": "nan"}, "t must be finite"),
+        ({"g": "x"}, "g: 'x' is not a number"),
+    ],
+)
+def test_bad_input_is_refused_as_the_mpmath_route_refuses_it(change: dict, pattern: str) -> None:
+    with pytest.raises(ValueError, match=pattern):
+        bounds({**CASES["R1"], **change}, 20)
