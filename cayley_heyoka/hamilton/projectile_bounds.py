@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 
 import mpmath
 from flint import arb, ctx
@@ -73,7 +74,8 @@ def projectile_bounds(
     same way and checked there first), each below ``10**-dps`` (relative above 1)."""
     dps = check_dps(dps)
     with mpmath.workdps(dps + 20):  # the mpmath route's checks and messages, before any work
-        read_parameters(g, mu, nu, t)
+        # (an exact time difference, a Fraction, needs none)
+        read_parameters(g, mu, nu, 0 if isinstance(t, Fraction) else t)
         read_triple(e, "e")
         read_triple(p, "p")
     first = int(dps * 3.33) + 64

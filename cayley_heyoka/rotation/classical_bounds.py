@@ -15,16 +15,12 @@ cut, and the sum is exact. Only the whole number of turns comes from the quadrat
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import mpmath
 from flint import arb, ctx
 
 from ..core.balls import Enclosure, ball, bound, exact_mid, to_ball
-
-if TYPE_CHECKING:
-    from .cayley1846 import Cayley1846
-    from .euler1758 import Euler1758
 
 __all__ = ["cayley1846_bounds", "euler1758_bounds"]
 
@@ -72,9 +68,10 @@ def _enclosure(balls: dict[str, arb], bits: int) -> Enclosure:
     return Enclosure(values, bounds, bits)
 
 
-def euler1758_bounds(euler: Euler1758, t: object) -> Enclosure:
+def euler1758_bounds(euler: Any, t: object) -> Enclosure:
     """Euler's state at ``t`` with proved bounds: ``p, q, r, u, v, U, cos_l, cos_m, cos_n,
-    phi_plus_F`` (the fields of :class:`.euler1758.EulerState`)."""
+    phi_plus_F`` (the fields of :class:`.euler1758.EulerState`). ``euler`` is an
+    :class:`.euler1758.Euler1758` (not imported here: it calls this module)."""
     from .closed_form import FreeRigidBody
 
     inertia, rates, direction = euler._inputs
@@ -112,10 +109,10 @@ def euler1758_bounds(euler: Euler1758, t: object) -> Enclosure:
         return _enclosure(balls, bits)
 
 
-def cayley1846_bounds(cayley: Cayley1846, t: object) -> Enclosure:
+def cayley1846_bounds(cayley: Any, t: object) -> Enclosure:
     """Cayley's 1846 state at ``t`` with proved bounds: ``p, q, r, upsilon, omega_over_k,
     angle, kappa, lambda_, mu, nu`` and ``quaternion_w … quaternion_z`` (the fields of
-    :class:`.cayley1846.Cayley1846State`)."""
+    :class:`.cayley1846.Cayley1846State`). ``cayley`` is a :class:`.cayley1846.Cayley1846`."""
     from .closed_form import FreeRigidBody
 
     inertia, rates, rodrigues = cayley._inputs
