@@ -7,10 +7,11 @@ quaternion) are explicit functions of the rates and the attitude at t (symbols:
 :func:`.enclosures.enclose`, they carry proved bounds too — an independent route from the
 quadratures in Θ that :meth:`Euler1758.at` and :meth:`Cayley1846.at` integrate.
 
-The angles are continuous in t, so each is the value ``a`` of those routes (their estimate
-is far below π) plus the principal argument of ``z e^{−ia}``, where ``z`` is the complex number
-whose argument the angle is: that ball lies near the positive real axis, away from the branch
-cut, and the sum is exact. Only the whole number of turns comes from the quadrature route.
+The angles are continuous in t, so each is the value ``a`` of those routes at 10 digits (its
+error is far below π) plus the principal argument of ``z e^{−ia}``, where ``z`` is the complex
+number whose argument the angle is: that ball lies near the positive real axis, away from the
+branch cut, and the sum is exact. Only the whole number of turns comes from the quadrature
+route.
 """
 
 from __future__ import annotations
@@ -25,6 +26,18 @@ from ..core.balls import Enclosure, ball, bound, exact_mid, to_ball
 __all__ = ["cayley1846_bounds", "euler1758_bounds"]
 
 QUATERNION = ("qw", "qx", "qy", "qz")
+#: Digits of the quadrature route that counts the angles' whole turns: its value need only be
+#: within π of the angle, and 10 digits cost a fraction of the requested ones.
+TURN_DPS = 10
+
+
+def _companions(solution: Any, coarse: Any, proved: Any) -> tuple[Any, Any]:
+    """The coarse quadrature route and the 1843 solution of ``solution``, built once."""
+    cached = getattr(solution, "_bounds_companions", None)
+    if cached is None:
+        cached = (coarse(), proved())
+        solution._bounds_companions = cached
+    return cached
 
 
 def _state(body, t: object, dps: int) -> tuple[list[arb], list[arb], int]:
@@ -75,10 +88,14 @@ def euler1758_bounds(euler: Any, t: object) -> Enclosure:
     from .closed_form import FreeRigidBody
 
     inertia, rates, direction = euler._inputs
-    estimate = euler.at(t)  # the angles' whole turns
-    # The space frame of the 1843 solution is the body frame at t = 0: P's space components
-    # are its body components then, and stay.
-    body = FreeRigidBody(inertia, rates, attitude=(1, 0, 0, 0), dps=euler.dps)
+    coarse, body = _companions(
+        euler,
+        lambda: type(euler)(inertia, rates, direction, dps=TURN_DPS),
+        # The space frame of the 1843 solution is the body frame at t = 0: P's space
+        # components are its body components then, and stay.
+        lambda: FreeRigidBody(inertia, rates, attitude=(1, 0, 0, 0), dps=euler.dps),
+    )
+    estimate = coarse.at(t)  # the angles' whole turns
     w, q, bits = _state(body, t, euler.dps)
     with ctx.workprec(bits):
         I = [ball(x, "inertia") for x in inertia]  # noqa: E741 - the inertia triple
@@ -116,8 +133,12 @@ def cayley1846_bounds(cayley: Any, t: object) -> Enclosure:
     from .closed_form import FreeRigidBody
 
     inertia, rates, rodrigues = cayley._inputs
-    estimate = cayley.at(t)  # the angle's whole turns
-    body = FreeRigidBody(inertia, rates, rodrigues=rodrigues, dps=cayley.dps)
+    coarse, body = _companions(
+        cayley,
+        lambda: type(cayley)(inertia, rates, rodrigues, dps=TURN_DPS),
+        lambda: FreeRigidBody(inertia, rates, rodrigues=rodrigues, dps=cayley.dps),
+    )
+    estimate = coarse.at(t)  # the angle's whole turns
     w, q, bits = _state(body, t, cayley.dps)
     with ctx.workprec(bits):
         I = [ball(x, "inertia") for x in inertia]  # noqa: E741 - the inertia triple

@@ -352,7 +352,7 @@ class FreeRigidBody:
         :class:`~cayley_heyoka.rotation.enclosures.FreeBodyBounds`: ``values[name]`` and
         ``bounds[name]`` for ``p, q, r, phi, psi``, the space quaternion ``qw, qx, qy, qz``
         and ``lambda, mu, nu``, each bound below ``10**-dps`` (relative above 1). It is also
-        the faster route: 0.11–0.17× the time of :meth:`at` for three distinct moments
+        the faster route: 0.11–0.18× the time of :meth:`at` for three distinct moments
         (validation/PROVED.md).
 
         Raises
