@@ -44,12 +44,14 @@ class Constants:
                 )
             # Invariable-frame attitude at t = 0 (Ψ = 0) and the constant space-side factor.
             self.q0_start = self.invariable_quaternion(mpmath.mpf(0), *w1)
+            self.attitude: list[mpmath.mpf] | None = None
             if attitude is None:
                 self.outer = (mpmath.mpf(1), mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0))
             else:
                 qa = [to_mpf(x) for x in attitude]
                 norm = mpmath.sqrt(sum(x * x for x in qa))
                 qa = [x / norm for x in qa]
+                self.attitude = qa
                 w, x, y, z = self.q0_start
                 self.outer = tuple(quaternion_multiply(qa, (w, -x, -y, -z)))
 
@@ -234,7 +236,12 @@ class Constants:
     # -- derived constants, crossings --------------------------------------------------------------
     def summary(self) -> dict[str, mpmath.mpf]:
         moments = sorted(self.I)
-        g = quaternion_rotate(self.outer, (0, 0, self.k))
+        # L in space is R(attitude) L(0): rotating (0, 0, k) by the outer factor is the same
+        # vector, but cancels to the digits of k in a component much smaller than k (p = 1e300
+        # and C r = 2.5 lost 300 digits in g″).
+        L0 = [self.I[i] * self.w1[i] for i in range(3)]
+        zero = mpmath.mpf(0)
+        g = (zero, zero, self.k) if self.attitude is None else quaternion_rotate(self.attitude, L0)
         out = {
             "h": self.h,
             "k": self.k,
