@@ -22,6 +22,8 @@ import mpmath
 from flint import arb, ctx
 
 from ..core.balls import Enclosure, ball, bound, exact_mid, to_ball
+from ..core.vectors import cross, dot, matvec, transpose
+from .attitude import quaternion_to_matrix
 
 __all__ = ["cayley1846_bounds", "euler1758_bounds"]
 
@@ -40,31 +42,13 @@ def _companions(solution: Any, coarse: Any, proved: Any) -> tuple[Any, Any]:
     return cached
 
 
-def _state(body, t: object, dps: int) -> tuple[list[arb], list[arb], int]:
+def _state(body, t: object) -> tuple[list[arb], list[arb], int]:
     """The proved rates and quaternion of the 1843 solution, as balls, and the precision."""
     b = body.enclose(t)
     with ctx.workprec(b.bits):
         rates = [to_ball(b.values[n], b.bounds[n]) for n in "pqr"]
         q = [to_ball(b.values[n], b.bounds[n]) for n in QUATERNION]
     return rates, q, b.bits
-
-
-def _matrix(q: list[arb]) -> list[list[arb]]:
-    """R(q) (body → space) of a unit quaternion."""
-    w, x, y, z = q
-    return [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ]
-
-
-def _cross(a, b):
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def _dot(a, b) -> arb:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def _angle_near(re: arb, im: arb, near: mpmath.mpf) -> arb:
@@ -96,24 +80,24 @@ def euler1758_bounds(euler: Any, t: object) -> Enclosure:
         lambda: FreeRigidBody(inertia, rates, attitude=(1, 0, 0, 0), dps=euler.dps),
     )
     estimate = coarse.at(t)  # the angles' whole turns
-    w, q, bits = _state(body, t, euler.dps)
+    w, q, bits = _state(body, t)
     with ctx.workprec(bits):
         I = [ball(x, "inertia") for x in inertia]  # noqa: E741 - the inertia triple
         w0 = [ball(x, "rates") for x in rates]
         P0 = [ball(x, "direction") for x in direction]
-        norm = _dot(P0, P0).sqrt()
+        norm = dot(P0, P0).sqrt()
         P0 = [x / norm for x in P0]
-        R = _matrix(q)
-        P = [sum((R[i][j] * P0[i] for i in range(3)), arb(0)) for j in range(3)]  # Rᵀ P
+        P = matvec(transpose(quaternion_to_matrix(q)), P0)  # Rᵀ P (q is unit: R(q) is R)
         Lb = [I[i] * w[i] for i in range(3)]
-        G = _dot(Lb, Lb)
-        F = _dot(Lb, w)
-        D = _dot([I[i] * w0[i] for i in range(3)], P0)  # L·P: constant, from t = 0 exactly
-        f = _dot(c := _cross([I[i] * w0[i] for i in range(3)], P0), c).sqrt()
-        s = _dot(c := _cross(Lb, w), c).sqrt()
-        v = _dot(w, P)
+        G = dot(Lb, Lb)
+        F = dot(Lb, w)
+        L0 = [I[i] * w0[i] for i in range(3)]
+        D = dot(L0, P0)  # L·P: constant, from t = 0 exactly
+        LxP, Lxw = cross(L0, P0), cross(Lb, w)
+        f, s = dot(LxP, LxP).sqrt(), dot(Lxw, Lxw).sqrt()
+        v = dot(w, P)
         root_G = G.sqrt()
-        R_det = _dot(P, _cross(Lb, w))
+        R_det = dot(P, Lxw)
         U = _angle_near(root_G * R_det, G * v - D * F, estimate.U)
         phi = _angle_near(root_G * s * U.cos(), F * f - D * s * U.sin(), estimate.phi_plus_F)
         # u from the axis whose coefficient is largest: p² = 𝔄 + 2Lu, with L = (B − C)/A …
@@ -139,16 +123,16 @@ def cayley1846_bounds(cayley: Any, t: object) -> Enclosure:
         lambda: FreeRigidBody(inertia, rates, rodrigues=rodrigues, dps=cayley.dps),
     )
     estimate = coarse.at(t)  # the angle's whole turns
-    w, q, bits = _state(body, t, cayley.dps)
+    w, q, bits = _state(body, t)
     with ctx.workprec(bits):
         I = [ball(x, "inertia") for x in inertia]  # noqa: E741 - the inertia triple
         Lb = [I[i] * w[i] for i in range(3)]
-        k = _dot(Lb, Lb).sqrt()
-        a = [sum((row[j] * Lb[j] for j in range(3)), arb(0)) for row in _matrix(q)]  # R L_b
-        upsilon = (k * k + _dot(a, Lb)) / 2
+        k = dot(Lb, Lb).sqrt()
+        a = matvec(quaternion_to_matrix(q), Lb)  # R L_b: the space momentum
+        upsilon = (k * k + dot(a, Lb)) / 2
         # tan(angle/2) = Ω/k, Ω = ρ·L_b = (x, y, z)·L_b / w: the angle is arg((k w + i v·L_b)²),
         # whatever the quaternion's sign.
-        re, im = k * q[0], _dot(q[1:], Lb)
+        re, im = k * q[0], dot(q[1:], Lb)
         angle = _angle_near(re * re - im * im, 2 * re * im, estimate.angle)
         half_cos, half_sin = (angle / 2).cos(), (angle / 2).sin()
         balls = dict(zip("pqr", w, strict=True))

@@ -30,13 +30,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import mpmath
 
 from ..core.accuracy import Certified, certify, shown, shown_error, to_mpf
 from ..core.inputs import MAX_DPS, check_dps, read_inertia, read_rates, read_triple
 from .attitude import (
+    matrix_to_quaternion,
     quaternion_multiply,
     quaternion_to_rodrigues,
     rodrigues_to_quaternion,
@@ -157,7 +158,11 @@ class FreeRigidBody:
         Unit quaternion (w, x, y, z) of the body relative to the space frame at t = 0 (norm 1
         to within 1e-12, then normalised). Default: the invariable frame with ν₀(0) = 0.
     rodrigues : sequence of 3 numbers, optional
-        The initial attitude as Cayley–Rodrigues parameters instead (not with ``attitude``).
+        The initial attitude as Cayley–Rodrigues parameters instead.
+    matrix : 3 rows of 3 numbers, optional
+        Or as the rotation matrix (body → space; RᵀR = I to within 1e-12, det R > 0), read by
+        its largest pivot. At most one of ``attitude``, ``rodrigues`` and ``matrix``; each
+        enters :meth:`enclose` exactly as given.
     dps : int
         Decimal digits to certify (≥ 5).
     require_physical : bool
@@ -186,18 +191,32 @@ class FreeRigidBody:
         *,
         attitude: Sequence[object] | None = None,
         rodrigues: Sequence[object] | None = None,
+        matrix: Sequence[Sequence[object]] | None = None,
         dps: int = 30,
         require_physical: bool = True,
     ) -> None:
         self.dps = dps = check_dps(dps)
+        given = {"quaternion": attitude, "rodrigues": rodrigues, "matrix": matrix}
+        given = {k: v for k, v in given.items() if v is not None}
+        if len(given) > 1:
+            raise ValueError(
+                "give at most one of attitude (quaternion), rodrigues and matrix, got "
+                + ", ".join(given)
+            )
+        # The attitude as given, every number exact, for the proved bounds (:meth:`enclose`).
+        self._attitude_spec: tuple[str, Any] | None = None
         with mpmath.workdps(dps + 20):
             read_inertia(inertia, require_physical)
             read_rates(rates)
-            if attitude is not None and rodrigues is not None:
-                raise ValueError("give at most one of attitude (quaternion) and rodrigues")
             if rodrigues is not None:
                 rho = read_triple(rodrigues, "rodrigues")
                 attitude = [mpmath.nstr(x, dps + 20) for x in rodrigues_to_quaternion(rho)]
+                self._attitude_spec = ("rodrigues", tuple(rodrigues))
+            elif matrix is not None:
+                attitude = [mpmath.nstr(x, dps + 20) for x in _read_matrix(matrix)]
+                self._attitude_spec = ("matrix", tuple(tuple(row) for row in matrix))
+            elif attitude is not None:
+                self._attitude_spec = ("quaternion", tuple(attitude))
             if attitude is not None:
                 if len(attitude) != 4:
                     raise ValueError(
@@ -210,12 +229,6 @@ class FreeRigidBody:
                         f"attitude: quaternion must have unit norm (to 1e-12), got {norm}"
                     )
         self._inputs = (tuple(inertia), tuple(rates), None if attitude is None else tuple(attitude))
-        # The attitude as given, every number exact, for the proved bounds (:meth:`enclose`).
-        self._attitude_spec: tuple[str, tuple] | None = None
-        if rodrigues is not None:
-            self._attitude_spec = ("rodrigues", tuple(rodrigues))
-        elif attitude is not None:
-            self._attitude_spec = ("quaternion", tuple(attitude))
         self._cache: dict[int, Constants] = {}
         # Digits lost to cancellation next to the separatrix come back as working precision.
         probe = self._constants(dps + 30)
@@ -463,6 +476,25 @@ class FreeRigidBody:
             self._span_digits(tt, QUADRATURE_SPAN_DIGITS, "the quadrature route"),
         )
         return cert.values["psi"], cert.errors["psi"]
+
+
+def _read_matrix(matrix: object) -> list[mpmath.mpf]:
+    """The unit quaternion (w ≥ 0) of a rotation matrix, checked: 3 × 3, RᵀR = I to within
+    1e-12, det R > 0."""
+    if isinstance(matrix, str) or not isinstance(matrix, Sequence) or len(matrix) != 3:
+        raise ValueError(f"matrix: expected 3 rows of 3 numbers, got {matrix!r}")
+    R = [read_triple(row, f"matrix[{i}]") for i, row in enumerate(matrix)]
+    defect = max(
+        abs(sum(R[k][i] * R[k][j] for k in range(3)) - (1 if i == j else 0))
+        for i in range(3)
+        for j in range(3)
+    )
+    if defect > mpmath.mpf("1e-12") or mpmath.det(mpmath.matrix(R)) <= 0:
+        raise ValueError(
+            f"matrix: not a rotation (needs RᵀR = I to within 1e-12 and det R > 0; "
+            f"max |RᵀR − I| = {mpmath.nstr(defect, 3)})"
+        )
+    return matrix_to_quaternion(R)
 
 
 def free_rigid_body(

@@ -24,11 +24,8 @@ class FreeBodyJob:
         The scene's moments and initial rates as it states them (decimal text, or floats at
         their binary value).
     attitude
-        The initial unit quaternion as text (well beyond ``dps`` digits), or None (rates only):
-        the constants' attitude.
-    attitude_given
-        The scene's initial attitude ``(kind, value)`` as it states it, or None: the proved
-        bounds start from it exactly (:func:`.enclosures.attitude_quaternion`).
+        The scene's initial attitude ``(kind, value)`` as it states it, or None (rates only):
+        the proved bounds start from it exactly (:func:`.enclosures.attitude_quaternion`).
     dps
         Digits the closed form certifies.
     t0
@@ -41,8 +38,7 @@ class FreeBodyJob:
 
     inertia: tuple[object, object, object]
     rates: tuple[object, object, object]
-    attitude: tuple[str, str, str, str] | None
-    attitude_given: tuple[str, Any] | None
+    attitude: tuple[str, Any] | None
     dps: int
     t0: str
     variables: tuple[str, ...]
@@ -53,11 +49,7 @@ class FreeBodyJob:
     MONITORS = ("energy", "momentum_squared", "momentum_space", "orthogonality")
 
     def body(self) -> Any:
-        from .closed_form import FreeRigidBody
-
-        body = FreeRigidBody(self.inertia, self.rates, attitude=self.attitude, dps=self.dps)
-        body._attitude_spec = self.attitude_given
-        return body
+        return free_body(self.inertia, self.rates, self.attitude, self.dps)
 
     def evaluator(self) -> Callable[[str], Row]:
         body = self.body()
@@ -105,3 +97,16 @@ class FreeBodyJob:
         else:  # orthogonality: the closed form's attitude is a rotation by construction
             value = mpmath.mpf(0)
         return self.rounding.write(value)[0]
+
+
+#: A scene's attitude kinds and the :class:`.closed_form.FreeRigidBody` arguments taking them.
+_KEYWORDS = {"quaternion": "attitude", "rodrigues": "rodrigues", "matrix": "matrix"}
+
+
+def free_body(inertia, rates, attitude: tuple[str, Any] | None, dps: int) -> Any:
+    """The closed form of a scene's body, its attitude ``(kind, value)`` passed as the scene
+    states it."""
+    from .closed_form import FreeRigidBody
+
+    extra = {} if attitude is None else {_KEYWORDS[attitude[0]]: attitude[1]}
+    return FreeRigidBody(inertia, rates, dps=dps, **extra)

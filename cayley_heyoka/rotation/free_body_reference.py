@@ -9,7 +9,6 @@ from typing import Any
 import numpy as np
 
 from ..core.certificate import (
-    BITS_PER_DIGIT,
     Certificate,
     exact_values,
     precision_of,
@@ -42,16 +41,12 @@ class FreeBodyClosedForm(ClosedForm):
         variables, monitors = names
         body = self.scene.model
         dps = prec.dps
-        # The attitude as the run starts it (a matrix or an unnormalised quaternion included),
-        # computed well beyond the digits asked for.
-        quaternion = body.initial_quaternion(Precision("real", int(dps * BITS_PER_DIGIT) + 96))
         return FreeBodyJob(
             # As the scene states them: a float is its binary value, as the run reads it (its
             # decimal text would be another number, 1e-17 away).
             inertia=tuple(body.inertia),
             rates=tuple(body.rates),
-            attitude=tuple(str(c) for c in quaternion),
-            attitude_given=body.attitude,
+            attitude=body.attitude,
             dps=dps,
             t0=t0,
             variables=variables,
@@ -98,17 +93,12 @@ class FreeBodyClosedForm(ClosedForm):
         import mpmath
 
         from ..core.balls import exact_rational
-        from .closed_form import FreeRigidBody
+        from .free_body_job import free_body
 
         body = self.scene.model
         dps = digits + 10
-        # The attitude as the run starts it (a matrix or an unnormalised quaternion included),
-        # computed well beyond the digits asked for.
-        quaternion = body.initial_quaternion(Precision("real", int(dps * BITS_PER_DIGIT) + 64))
-        exact = FreeRigidBody(
-            body.inertia, body.rates, attitude=[str(c) for c in quaternion], dps=dps
-        )
-        exact._attitude_spec = body.attitude  # the proved bounds start from it exactly
+        # The attitude as the scene states it: the proved bounds start from it exactly.
+        exact = free_body(body.inertia, body.rates, body.attitude, dps)
         t = result.t
         names = [n for n in ("p", "q", "r", "qw", "qx", "qy", "qz") if n in result.variables]
         has_rodrigues = "lambda" in result.variables

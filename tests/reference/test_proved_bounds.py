@@ -17,6 +17,7 @@ from test_closed_form import CASES
 from cayley_heyoka.core.balls import ball, bound, exact_mid
 from cayley_heyoka.reference import FreeRigidBody, PrecisionNotReached
 from cayley_heyoka.rotation import enclosures
+from cayley_heyoka.rotation.attitude import rodrigues_to_matrix, rodrigues_to_quaternion
 
 NAMES = ("p", "q", "r", "phi", "psi", "qw", "qx", "qy", "qz", "lambda", "mu", "nu")
 ATTITUDE = ("0.5", "0.5", "0.5", "0.5")
@@ -107,20 +108,30 @@ def test_float_and_text_inputs_give_their_own_motion():
 @pytest.mark.parametrize("given", ["rodrigues", "matrix"])
 def test_the_attitude_as_a_scene_states_it(given):
     """Rodrigues parameters enter as the quaternion (1, λ, μ, ν), a matrix by its largest pivot,
-    both exactly: the same motion as the unit quaternion they stand for."""
+    both exactly: the same motion as the unit quaternion they stand for (the matrix written to
+    70 digits, so within 1e-69 of it)."""
     rho = ("0.1", "0.2", "-0.3")
     inertia, rates = ("1", "1.5", "2.5"), ("0.125", "0.25", "1")
-    plain = body(inertia, rates, 30, rodrigues=rho)
-    other = body(inertia, rates, 30, rodrigues=rho)
-    if given == "matrix":
-        from cayley_heyoka.rotation.attitude import rodrigues_to_matrix
-
-        with mpmath.workdps(80):
-            R = rodrigues_to_matrix([mpmath.mpf(x) for x in rho])
-            other._attitude_spec = ("matrix", [[mpmath.nstr(x, 70) for x in row] for row in R])
+    with mpmath.workdps(80):
+        q = [mpmath.nstr(x, 75) for x in rodrigues_to_quaternion([mpmath.mpf(x) for x in rho])]
+        R = rodrigues_to_matrix([mpmath.mpf(x) for x in rho])
+        matrix = [[mpmath.nstr(x, 70) for x in row] for row in R]
+    plain = body(inertia, rates, 30, attitude=q)
+    kw = {"rodrigues": rho} if given == "rodrigues" else {"matrix": matrix}
+    other = body(inertia, rates, 30, **kw)
     a, b = plain.enclose("3"), other.enclose("3")
-    for name in ("qw", "qx", "qy", "qz"):
+    for name in ("qw", "qx", "qy", "qz", "p", "psi"):
         assert abs(a.values[name] - b.values[name]) <= a.bounds[name] + b.bounds[name] + 1e-60
+
+
+def test_a_matrix_that_is_no_rotation_is_refused():
+    inertia, rates = ("1", "1.5", "2.5"), ("0.1", "0.2", "1")
+    with pytest.raises(ValueError, match="matrix: not a rotation"):
+        body(inertia, rates, 30, matrix=[[1, 0, 0], [0, 1, 0], [0, 0, -1]])
+    with pytest.raises(ValueError, match="matrix: expected 3 rows"):
+        body(inertia, rates, 30, matrix=[[1, 0, 0]])
+    with pytest.raises(ValueError, match="at most one of"):
+        body(inertia, rates, 30, rodrigues=(0, 0, 0), matrix=[[1, 0, 0]] * 3)
 
 
 def test_crossing_times_are_proved():
