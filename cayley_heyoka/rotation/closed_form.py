@@ -50,8 +50,8 @@ if TYPE_CHECKING:
 __all__ = ["Crossing", "FreeBodyState", "FreeRigidBody", "free_rigid_body"]
 
 AXES = ("x1", "y1", "z1")
-#: The quadratures (cross-checks) place times up to 10³⁰ periods away (Ψ's time form takes
-#: ~5 s there at 30 digits, 90 s at 10²⁰⁰); the Jacobi route and the proved bounds 10¹⁰⁰⁰.
+#: The quadratures (cross-checks) place times up to 10³⁰ periods away (their cost grows fast
+#: with the digits a long span needs); the Jacobi route and the proved bounds 10¹⁰⁰⁰.
 QUADRATURE_SPAN_DIGITS = 31
 _SINGULAR_FIELDS = ("nu0", "lambda0", "mu0")
 
@@ -286,8 +286,7 @@ class FreeRigidBody:
         self, t: mpmath.mpf, limit: int = MAX_DPS, what: str = "the closed form"
     ) -> int:
         """Digits lost in u = Ωt + u₀ over many periods; refused beyond ``limit`` of them (a
-        time 10²⁰⁰⁰⁰ periods away took minutes in either route, and the quadratures 90 s at
-        10²⁰⁰)."""
+        time 10²⁰⁰⁰⁰ periods away would be computed at 20 000 digits)."""
         if not mpmath.isfinite(self.period) or self.period == 0:
             return 0
         digits = int(mpmath.log10(1 + abs(t) / self.period)) + 1
