@@ -31,7 +31,7 @@ import numpy as np
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
-from .model import Model, own_terminal
+from .model import Handover, Model, own_terminal
 from .precision import Precision, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
 from .result import Result, versions
@@ -163,6 +163,10 @@ class Propagation:
         require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
         require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")
         self.compiled, self._cached = compile_model(model, scene.integrator)
+        self._compile_seconds = 0.0 if self._cached else self.compiled.compile_seconds
+        self._first = model
+        # A variant a terminal handler asked for (:class:`Handover`), taken over after the call.
+        self._handover: Handover | None = None
         first = evaluate_outputs(
             self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
         )
@@ -190,7 +194,8 @@ class Propagation:
         self.terminal = own_terminal(model.terminal)
         self.counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
         self.status, self.message = 0, "every output time was reached"
-        self._stopped_at: tuple | None = None
+        # Occurrences of recorded events logged by terminal events that stand for them.
+        self._logged: list[tuple] = []
         # The output times the current call may record (increasing), the parameter vectors of
         # the first of them — those passed before a terminal handler changed the parameters —
         # and the time of the next one (None: none left), for :meth:`_on_terminal`.
@@ -349,6 +354,9 @@ class Propagation:
             pars_rows += given + [self._pars.copy() for _ in range(len(out) - len(given))]
             self.done += len(out)
             code = int(outcome)
+            if self._handover is not None:
+                ta = self._take_over(self._handover.variant)
+                continue
             if outcome == hy.taylor_outcome.time_limit:
                 continue
             if outcome == hy.taylor_outcome.step_limit:
@@ -391,14 +399,59 @@ class Propagation:
         if self._ta is not None:
             self._release_integrator()
 
+    def _take_over(self, variant: str) -> Any:
+        """Go on with the model's ``variant``: the same time, state, parameters, tallies,
+        handlers' own state and recorded events, in the variant's compiled integrator."""
+        self._handover = None
+        old, model = self._ta, self.model
+        if model.variants is None:
+            raise RuntimeError(f"a handler asked for variant {variant!r} of a model without any")
+        target = model.variants(variant)
+        if target.pars.names != model.pars.names or target.state_names != model.state_names:
+            raise RuntimeError(f"variant {variant!r} does not share its model's state and pars")
+        compiled, cached = compile_model(target, self.scene.integrator)
+        if not cached:
+            self._compile_seconds += compiled.compile_seconds
+        dtime, state = old.dtime, old.state.copy()
+        recorded = [
+            (list(ev.callback.times), list(ev.callback.directions))
+            for ev in (old.nt_events if model.events else [])
+        ]
+        kept = {
+            spec.counter: spec.handle.checkpoint()
+            for spec in self.terminal
+            if hasattr(spec.handle, "checkpoint")
+        }
+        self._release_integrator()
+        self.model, self.compiled = target, compiled
+        self.terminal = own_terminal(target.terminal)
+        for spec in self.terminal:
+            if spec.counter in kept and hasattr(spec.handle, "resume"):
+                spec.handle.resume(kept[spec.counter])
+            self.counters.setdefault(spec.counter, 0)
+        self._ta = ta = self._fresh_integrator()
+        ta.dtime = dtime
+        ta.state[:] = state
+        self._held = len(ta.pars)
+        ta.pars[:] = self._pars[: self._held]
+        for ev, (times, directions) in zip(
+            ta.nt_events if target.events else [], recorded, strict=True
+        ):
+            ev.callback.times, ev.callback.directions = times, directions
+        return ta
+
     def _restart(self) -> Any:
         """Back to the first output time with the integrator reset (its event recorders
         empty), the terminal handlers, their tallies and the parameters as at the start;
         nothing was recorded yet."""
         self._release_integrator()
+        if self.model is not self._first:
+            self.model = self._first
+            self.compiled, _ = compile_model(self._first, self.scene.integrator)
         self._pars = self.precision.array(self.model.pars.values)
         self.terminal = own_terminal(self.model.terminal)
         self.counters = dict.fromkeys(self.counters, 0)
+        self._logged = []
         self._ta = ta = self._fresh_integrator()
         ta.pars[:] = self._pars[: self._held]
         return ta
@@ -468,10 +521,13 @@ class Propagation:
         stop = spec.handle(ta, self._pars)
         self._ta_pars[:] = self._pars[: self._held]
         self.counters[spec.counter] += 1
+        if spec.records is not None and stop is not None:
+            self._logged.append((spec.records, t, spec.direction))
+        if isinstance(stop, Handover):
+            self._handover = stop  # taken over when heyoka's call returns (_propagate)
+            return False
         if stop is not None:
             self.status, self.message = -1, stop
-            if spec.records is not None:
-                self._stopped_at = (spec.records, t, spec.direction)
             return False
         if self._signals.received:
             # A signal noted while the parameters were copied back: its poison was overwritten.
@@ -495,6 +551,7 @@ class Propagation:
             raise ValueError(f"a stopped run cannot be continued: {self.message}")
         prec, ta = self.precision, self._ta
         return {
+            "variant": self.model.variant,
             "done": self.done,
             "time": list(prec.to_text(prec.array(ta.dtime))),
             "state": list(prec.to_text(ta.state)),
@@ -508,10 +565,17 @@ class Propagation:
                 spec.handle.checkpoint() if hasattr(spec.handle, "checkpoint") else None
                 for spec in self.terminal
             ],
+            "logged": [
+                [spec.name, list(prec.to_text(prec.array([t])))[0], d]
+                for spec, t, d in self._logged
+            ],
         }
 
     def restore(self, snapshot: dict[str, Any]) -> None:
         """Continue from a :meth:`snapshot` of a run of the same scene."""
+        variant = snapshot.get("variant", "")
+        if variant != self.model.variant:
+            self._take_over(variant)
         prec, ta = self.precision, self._ta
         # Its first steps were taken (and the span estimated) before the snapshot.
         self._probes = []
@@ -533,6 +597,11 @@ class Propagation:
         for ev, (times, directions) in zip(recorded, snapshot["events"], strict=True):
             ev.callback.times = list(prec.from_text(times))
             ev.callback.directions = [int(d) for d in directions]
+        specs = {spec.name: spec for spec in self.model.events}
+        self._logged = [
+            (specs[name], prec.from_text(np.array([t]))[0], int(d))
+            for name, t, d in snapshot.get("logged", [])
+        ]
 
     def result(self, states: np.ndarray | None = None, pars: np.ndarray | None = None) -> Result:
         """The result of what has been recorded (``states``/``pars``: every row, if not kept)."""
@@ -557,7 +626,7 @@ class Propagation:
             variables={k: values[k] for k in model.outputs},
             monitors={k: values[k] for k in model.monitors},
             conserved=model.conserved,
-            events=event_logs(model, self._ta, prec, self._stopped_at),
+            events=event_logs(model, self._ta, prec, self._logged),
             precision=prec,
             status=self.status,
             message=self.message,
@@ -566,7 +635,7 @@ class Propagation:
             metadata={
                 **versions(),
                 "wall_seconds": time.perf_counter() - self._wall0,
-                "compile_seconds": 0.0 if self._cached else self.compiled.compile_seconds,
+                "compile_seconds": self._compile_seconds,
                 "compiled_from_cache": self._cached,
                 "order": int(self._ta.order),
                 "tolerance": str(self._ta.tol),

@@ -42,7 +42,7 @@ import heyoka as hy
 import numpy as np
 
 from . import compiler, engine, recording
-from .model import Model, TerminalSpec, own_terminal
+from .model import Handover, Model, TerminalSpec, own_terminal
 from .precision import Precision
 from .result import EventLog
 from .scene import IntegratorOptions
@@ -56,7 +56,9 @@ class LaneResult:
     vector (one per row when terminal-event handlers change it); ``status`` is 0 when every
     output time was reached, -1 otherwise, with ``message`` saying why (``nonfinite``: the state
     became non-finite); ``counters`` the Taylor steps and terminal-event tallies; ``time`` the
-    time reached.
+    time reached; ``handover``: a handler asked for another variant of the model
+    (:class:`~.model.Handover`), which a lane cannot compile: run the member with
+    :func:`cayley_heyoka.run`.
     """
 
     states: np.ndarray
@@ -67,6 +69,7 @@ class LaneResult:
     events: dict[str, EventLog]
     time: float
     nonfinite: bool
+    handover: bool = False
 
 
 @dataclass
@@ -104,7 +107,7 @@ class _Everything:
                 0,
                 "every output time was reached",
                 counters,
-                recording.logs_of(self.model, events, _DOUBLE, None) if events else {},
+                recording.logs_of(self.model, events, _DOUBLE) if events else {},
                 float(end),
                 False,
             )
@@ -410,6 +413,7 @@ class _Member:
     event_directions: list[list[int]] = field(default_factory=list)
     time: float = 0.0
     nonfinite: bool = False
+    handover: bool = False
 
 
 class _Lanes:
@@ -683,6 +687,11 @@ class _Lanes:
         stop = spec.handle(_LaneView(ta, lane), m.pars)
         ta.pars[:, lane] = m.pars[: self.held]
         m.counters[spec.counter] += 1
+        if isinstance(stop, Handover):
+            # The variant's code is another batch integrator: the member goes to run().
+            m.status, m.handover = -1, True
+            m.message = f"handed over to the model's variant {stop.variant!r} at t = {t}"
+            return False
         if stop is not None:
             m.status, m.message = -1, stop
             if spec.records is not None:
@@ -710,9 +719,10 @@ class _Lanes:
         if m.terminal:
             pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
         recorded = list(zip(m.event_times, m.event_directions, strict=True))
-        events = recording.logs_of(self.model, recorded, _DOUBLE, m.stopped_at)
+        logged = [m.stopped_at] if m.stopped_at is not None else []
+        events = recording.logs_of(self.model, recorded, _DOUBLE, logged)
         return LaneResult(
-            states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite
+            states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite, m.handover
         )
 
 

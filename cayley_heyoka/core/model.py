@@ -71,7 +71,10 @@ class EventSpec:
 
     ``direction`` is 0 (any), +1 (upwards only) or -1 (downwards only); ``label`` says what
     fired (e.g. the body axis), several specs may share one ``name``; ``labels`` replaces it
-    by direction of crossing (e.g. ``{1: "ascending", -1: "descending"}``).
+    by direction of crossing (e.g. ``{1: "ascending", -1: "descending"}``). ``alternating``:
+    the crossings of a continuous function through a level, whose directions alternate, so
+    that a repeated direction is one zero found twice (by a terminal event that stands for it
+    and by the next variant of the model: :class:`Handover`), logged once.
     """
 
     name: str
@@ -79,6 +82,7 @@ class EventSpec:
     expression: Expr
     direction: int = 0
     labels: dict[int, str] | None = None
+    alternating: bool = False
 
     def label_for(self, direction: int) -> str:
         """The label of an occurrence crossing zero in ``direction``."""
@@ -93,10 +97,12 @@ class TerminalSpec:
     model's whole parameter vector ``pars`` (the integrator holds only the leading ones its
     equations use; the engine copies them back after the call). It may change the state and
     ``pars`` (e.g. re-base an attitude chart), and the run goes on; or it returns a message,
-    and the run ends there with that message (results kept). ``counter`` names the tally of
+    and the run ends there with that message (results kept); or it returns a
+    :class:`Handover`, and the run goes on from there with another variant of the model.
+    ``counter`` names the tally of
     its occurrences in :attr:`Result.counters`. ``records``, if given, is the recorded event
-    this stop stands for: the stop is logged as its occurrence (the same zero found twice, by
-    two root searches, could otherwise land either side of the stop).
+    this stop (or hand-over) stands for: it is logged as its occurrence (the same zero found
+    twice, by two root searches, could otherwise land either side of the stop).
 
     A handler that keeps state of its own between calls (not in ``pars``) exposes it as
     ``checkpoint() -> JSON value`` and ``resume(value)``, so that an interrupted run continues
@@ -105,9 +111,22 @@ class TerminalSpec:
 
     expression: Expr
     direction: int
-    handle: Callable[[Any, Any], str | None]
+    handle: Callable[[Any, Any], str | Handover | None]
     counter: str
     records: EventSpec | None = None
+
+
+@dataclass(frozen=True)
+class Handover:
+    """A terminal handler's request: go on with ``variant`` of the model (:attr:`Model.variants`).
+
+    The handler has already put the state and the parameters in the variant's terms. The
+    variants of one scene share their state variables, parameter table, outputs, monitors and
+    recorded events; they differ in their equations and terminal events, so that each compiles
+    only the terms its stretch of the motion needs.
+    """
+
+    variant: str
 
 
 def own_terminal(specs: Sequence[TerminalSpec]) -> list[TerminalSpec]:
@@ -151,6 +170,11 @@ class Model:
     unbounded
         Outputs whose infinite value is a value, not a failure (the Cayley–Rodrigues λ, μ, ν
         at a half-turn): a run never stops for them, nor is refused when they start infinite.
+    variant
+        This model's name among its scene's variants ("" when it has none).
+    variants
+        ``name -> Model``: the scene's other variants, built (and kept) on first use; a
+        terminal handler moves a run to one by returning :class:`Handover`. None: no others.
     """
 
     family: str
@@ -164,6 +188,8 @@ class Model:
     terminal: list[TerminalSpec] = field(default_factory=list)
     compact: bool = False
     unbounded: tuple[str, ...] = ()
+    variant: str = ""
+    variants: Callable[[str], Model] | None = None
 
     @property
     def state_names(self) -> list[str]:

@@ -4,6 +4,7 @@ precision, event logs, and the checks that a run's records fit in memory and sta
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -128,28 +129,33 @@ def evaluate_outputs(
 
 
 def event_logs(
-    model: Model, ta: Any, prec: Precision, stopped_at: tuple | None
+    model: Model, ta: Any, prec: Precision, logged: Sequence[tuple] = ()
 ) -> dict[str, EventLog]:
-    """The occurrences recorded by ``ta``'s event callbacks (and a terminal stop), by name."""
+    """The occurrences recorded by ``ta``'s event callbacks (and terminal events that stand
+    for one: ``logged``), by name."""
     recorded = ta.nt_events if model.events else []
     return logs_of(
-        model, [(ev.callback.times, ev.callback.directions) for ev in recorded], prec, stopped_at
+        model, [(ev.callback.times, ev.callback.directions) for ev in recorded], prec, logged
     )
 
 
 def logs_of(
-    model: Model, recorded: list[tuple[list, list]], prec: Precision, stopped_at: tuple | None
+    model: Model, recorded: list[tuple[list, list]], prec: Precision, logged: Sequence[tuple] = ()
 ) -> dict[str, EventLog]:
-    """The event logs of ``model`` from each event's recorded (times, directions)."""
+    """The event logs of ``model`` from each event's recorded (times, directions), and the
+    occurrences ``(spec, time, direction)`` logged by terminal events (a stop, a hand-over)."""
     gathered: dict[str, list[tuple[Any, int, str]]] = {}
     for spec, (times, directions) in zip(model.events, recorded, strict=True):
         gathered.setdefault(spec.name, [])
         gathered[spec.name] += [
             (t, d, spec.label_for(d)) for t, d in zip(times, directions, strict=True)
         ]
-    if stopped_at is not None:
-        spec, t, d = stopped_at
+    for spec, t, d in logged:
         gathered.setdefault(spec.name, []).append((t, d, spec.label_for(d)))
+    alternating = {spec.name for spec in model.events if spec.alternating}
+    for name in alternating & gathered.keys():
+        items = sorted(gathered[name], key=lambda x: x[0])
+        gathered[name] = [x for k, x in enumerate(items) if k == 0 or x[1] != items[k - 1][1]]
     logs = {}
     for name, items in gathered.items():
         items.sort(key=lambda x: x[0])

@@ -134,8 +134,11 @@ def integrate_members(
     for group in groups.values():
         terminal = group[0][2].terminal
         if prec.kind == "double":
-            _lanes_group(group, part, layout, prec, threads, cancel)
-            path = PATH_LANES
+            handed = _lanes_group(group, part, layout, prec, threads, cancel)
+            for path, count in ((PATH_RUN, handed), (PATH_LANES, len(group) - handed)):
+                if count:
+                    part.paths[path] = part.paths.get(path, 0) + count
+            continue
         elif terminal:
             counters = ", ".join(t.counter for t in terminal)
             part.why[PATH_RUN] = f"{prec.name} with terminal events ({counters})"
@@ -243,9 +246,10 @@ def _lanes_group(
     prec: Precision,
     threads: int,
     cancel: threading.Event | None = None,
-) -> None:
+) -> int:
     """Members sharing compiled code, in double: batch lanes (each member's own terminal-event
-    handlers acting on its lane)."""
+    handlers acting on its lane). Returns how many were handed to ``run()`` instead (a
+    hand-over to another variant of their model)."""
     from ..core import compiler, lanes, recording
 
     _, scene0, model0 = group[0]
@@ -272,10 +276,18 @@ def _lanes_group(
     except Exception as exc:  # the whole call failed: every member of the group is marked
         for row, _, _ in group:
             part.message[row] = reason(exc)
-        return
+        return 0
     if cancel is not None and cancel.is_set():
-        return  # the chunk is dropped
+        return 0  # the chunk is dropped
+    handed = [item for item, run in zip(group, runs, strict=True) if run.handover]
+    if handed:
+        # A member that reached another variant of its model (Cayley's orbit near the
+        # reference plane) needs that variant's code, which its batch does not hold.
+        part.why[PATH_RUN] = "a hand-over to another variant of the model (run() compiles it)"
+        _run_group(handed, part, layout, prec, threads)
     for (row, _, model), run in zip(group, runs, strict=True):
+        if run.handover:
+            continue
         reached = len(run.states)
         rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
         values = recording.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
@@ -292,6 +304,7 @@ def _lanes_group(
             log = run.events.get(name)
             part.events[name][row] = len(log) if log is not None else 0
         _record(part, row, layout, prec, values, model.conserved, complete)
+    return len(handed)
 
 
 def _ensemble_group(
@@ -349,7 +362,7 @@ def _ensemble_group(
             }.get(outcome, f"stopped with outcome {outcome}")
             part.message[row] = f"{why} after {kept} (the last output time kept)"
         part.steps[row] = nsteps
-        logs = recording.event_logs(model, ta, prec, None)
+        logs = recording.event_logs(model, ta, prec)
         for name in layout.events:
             part.events[name][row] = len(logs[name]) if name in logs else 0
         # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
