@@ -36,6 +36,7 @@ import heyoka as hy
 from ..core import vectors
 from ..mechanics import frames
 from .disturbing import Gradient
+from .tilt import on_reference
 
 Expr = hy.expression
 _ZERO = hy.expression(0.0)
@@ -89,10 +90,18 @@ class OrbitAxes:
 
 
 def cayley_axes(
-    Theta: Expr, Phi: Expr, u: Expr, plane: ReferencePlane | None
+    Theta: Expr,
+    Phi: Expr,
+    u: Expr,
+    plane: ReferencePlane | None,
+    tilt: tuple[Expr, Expr] | None = None,
 ) -> tuple[OrbitAxes, frames.Matrix | None]:
-    """The body frame from the angles (§5), mapped to frame 0 when the plane moves."""
+    """The body frame from the angles (§5), mapped to frame 0 when the plane moves; with
+    ``tilt`` = (cos β, sin β), the angles are on the working frame ``R₁(β)`` of frame 1
+    (:mod:`.tilt`)."""
     x3, y3, n = frames.orbit_axes(Theta, Phi, u)
+    if tilt is not None:
+        x3, y3, n = (on_reference(v, *tilt) for v in (x3, y3, n))
     if plane is None:
         return OrbitAxes(x3, y3, n), None
     M01 = plane.matrix()
@@ -134,9 +143,17 @@ def in_plane_rates(
 
 
 def plane_rates(
-    u: Expr, h: Expr, Phi: Expr, Omega_beta: Expr | None, plane: ReferencePlane | None, Theta: Expr
+    u: Expr,
+    h: Expr,
+    Phi: Expr,
+    Omega_beta: Expr | None,
+    plane: ReferencePlane | None,
+    Theta: Expr,
+    tilt: tuple[Expr, Expr] | None = None,
 ) -> list[Expr]:
-    """dΘ/dt, dΣ/dt, dΦ/dt in the reduced form (§6.4), with only the terms present."""
+    """dΘ/dt, dΣ/dt, dΦ/dt in the reduced form (§6.4), with only the terms present; with
+    ``tilt``, of the angles on the working frame ``R₁(β)`` (:func:`cayley_axes`), which turns
+    with the reference plane."""
     sP, cP = hy.sin(Phi), hy.cos(Phi)
     dTheta, dSigma, dPhi = [], [], []
     if Omega_beta is not None:
@@ -147,6 +164,14 @@ def plane_rates(
         dPhi.append(hy.cos(u) * turn)
     if plane is not None:
         A, B, C = plane.rates_on_node(Theta)
+        if tilt is not None and any(w is not None for w in (A, B, C)):
+            # Frame 1's angular velocity on its own axes is (A, B, C) at Θ = 0; on W, R₁(β)ᵀ
+            # of it, taken along W's node line.
+            w = [_ZERO if v is None else v for v in plane.rates_on_node(_ZERO)]
+            c, s = tilt
+            wy, wz = c * w[1] + s * w[2], c * w[2] - s * w[1]
+            cT, sT = hy.cos(Theta), hy.sin(Theta)
+            A, B, C = w[0] * cT + wy * sT, wy * cT - w[0] * sT, wz
         if B is not None:
             dTheta.append(-cP * B / sP)
             dSigma.append(-B / sP)

@@ -17,6 +17,7 @@ when it moves.
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import heyoka as hy
@@ -36,6 +37,15 @@ from .encke import STATE as ENCKE
 from .encke import Encke
 from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
+from .tilt import (
+    FRAME,
+    LEVEL,
+    TILTED,
+    EquatorialHandover,
+    angles_in,
+    reference_normal,
+    sin2_on_reference,
+)
 
 CARTESIAN = ("x", "y", "z", "vx", "vy", "vz")
 CAYLEY = ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi")
@@ -45,7 +55,43 @@ _GUARD_DIGITS = 15
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated orbit scene into a :class:`~cayley_heyoka.core.model.Model`."""
+    """Turn a validated orbit scene into a :class:`~cayley_heyoka.core.model.Model`.
+
+    A ``cayley`` scene that can approach the reference plane has two variants (:mod:`.tilt`):
+    the run starts with the one its start's sin Φ calls for, and builds the other when a
+    terminal event hands over to it.
+    """
+    orbit: Orbit = scene.model
+    if not _hands_over(orbit):
+        return _build(scene, None)
+    t0 = _start_time(scene)
+    with mpmath.workdps(30):
+        low = _sin_phi(orbit, scene_mpf(t0)) <= scene_mpf(orbit.equatorial_limit)
+    built: dict[str, Model] = {}
+    lock = threading.Lock()
+
+    def variant(name: str) -> Model:
+        with lock:
+            if name not in built:
+                built[name] = _build(scene, name, variant)
+            return built[name]
+
+    return variant(TILTED if low else LEVEL)
+
+
+def _hands_over(orbit: Orbit) -> bool:
+    """Whether a ``cayley`` orbit can reach the reference plane: Φ can change (a perturbation,
+    a turning plane) and ``equatorial_limit`` is not 0."""
+    if orbit.formulation != "cayley" or exact_fraction(orbit.equatorial_limit) == 0:
+        return False
+    plane = orbit.plane
+    turning = plane is not None and (
+        exact_fraction(plane.theta_rate) != 0 or exact_fraction(plane.phi_rate) != 0
+    )
+    return bool(orbit.perturbations) or turning
+
+
+def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
     orbit: Orbit = scene.model
     prec = scene.integrator.precision
     pars = ParTable(prec)
@@ -62,6 +108,8 @@ def build_model(scene: Scene) -> Model:
         # formulation's own rectification computes.
         with mpmath.workdps(prec.dps + _GUARD_DIGITS):
             b.encke(*initial_cartesian(orbit, scene_mpf(t0)))
+    elif orbit.formulation == "cayley":
+        b.cayley(initial_state(orbit, t0, prec.dps + _GUARD_DIGITS, variant), variant)
     else:
         start = initial_state(orbit, t0, prec.dps + _GUARD_DIGITS)
         getattr(b, orbit.formulation)(start)
@@ -79,9 +127,14 @@ def build_model(scene: Scene) -> Model:
         conserved = tuple(k for k in conserved if k in wanted)
     events = _events(scene, orbit, b, pars)
     initial = [prec.number(v) for v in b.initial]
-    return Model(
+    model = Model(
         "orbit", b.system, initial, pars, b.outputs, monitors, conserved, events, b.terminal
     )
+    if variant is not None:
+        # Tilted, the state does not carry Θ, Σ on the reference plane: NaN is their value.
+        model.unbounded = ("Theta", "Sigma")
+        model.variant, model.variants = variant, variants
+    return model
 
 
 def validate(scene: Scene) -> None:
@@ -123,20 +176,27 @@ def validate(scene: Scene) -> None:
             exact_fraction(plane.theta_rate) != 0 or exact_fraction(plane.phi_rate) != 0
         )
         # Without a disturbing function or a turning reference plane Θ, Σ, Φ are constant and
-        # no cosec Φ is compiled: any inclination will do.
+        # no cosec Φ is compiled: any inclination will do. With a limit the run starts on the
+        # tilted frame below it (:mod:`.tilt`); without one, the equations need sin Φ ≠ 0.
         if orbit.formulation == "cayley" and (orbit.perturbations or turning):
-            M01 = _plane_matrix_at(orbit.plane, t)
-            n = vectors.matvec(vectors.transpose(M01), [c / h for c in H])
-            sin_phi = mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
-            limit = scene_mpf(orbit.equatorial_limit)
-            if sin_phi <= limit or sin_phi == 0:
+            if exact_fraction(orbit.equatorial_limit) == 0 and _sin_phi(orbit, t) == 0:
                 raise SceneError(
                     "orbit.formulation",
-                    f"'cayley' needs sin Φ > orbit.equatorial_limit = {orbit.equatorial_limit}, "
-                    f"but the orbit starts at sin Φ = {mpmath.nstr(sin_phi, 6)} (Θ and Σ are "
-                    "ill-defined near Φ = 0 or π); use formulation = 'quaternion' (regular at "
-                    "every inclination) or 'cartesian'",
+                    "'cayley' with orbit.equatorial_limit = 0 needs sin Φ ≠ 0, but the orbit "
+                    "starts in the reference plane (Θ and Σ are undefined there: cosec Φ in "
+                    "their equations); give a limit > 0 (the run then starts on a tilted frame) "
+                    "or use formulation = 'quaternion' or 'cartesian'",
                 )
+
+
+def _sin_phi(orbit: Orbit, t: Any) -> Any:
+    """sin Φ of the osculating orbit on the reference plane at time t (mpmath)."""
+    x, v = initial_cartesian(orbit, t)
+    H = vectors.cross(x, v)
+    h = mpmath.sqrt(vectors.dot(H, H))
+    M01 = _plane_matrix_at(orbit.plane, t)
+    n = vectors.matvec(vectors.transpose(M01), [c / h for c in H])
+    return mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
 
 
 def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
@@ -150,9 +210,10 @@ def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
     )
 
 
-def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
+def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list[str]:
     """The formulation's initial state as decimal text with ``dps`` digits (not ``encke``,
-    whose state depends on the parameters its model allocates: see :meth:`_Builder.encke`)."""
+    whose state depends on the parameters its model allocates: see :meth:`_Builder.encke`);
+    Cayley's angles on the working frame of ``variant`` (:mod:`.tilt`) if given."""
     if orbit.formulation == "encke":
         raise ValueError("the encke state is the deviation from its ellipse: build the model")
     with mpmath.workdps(dps):
@@ -165,7 +226,10 @@ def initial_state(orbit: Orbit, t: Any, dps: int) -> list[str]:
             s = el.cartesian_to_cayley(x, v, sigma=scene_mpf(orbit.sigma0), frame=frame)
             values = [s.r, s.rdot, s.rho, s.h]
             if orbit.formulation == "cayley":
-                values += [s.Theta, s.Sigma, s.Phi]
+                angles = (s.Theta, s.Sigma, s.Phi)
+                if variant == TILTED:
+                    angles = angles_in(TILTED, *angles)
+                values += list(angles)
             else:
                 values += _plane_quaternion(frame, (s.Theta, s.Sigma, s.Phi))
         return [mpmath.nstr(c, dps, strip_zeros=False) for c in values]
@@ -253,28 +317,55 @@ class _Builder:
         self.radius = hy.sqrt(vectors.dot(x_, x_))
         self.terminal.append(TerminalSpec(en.event(psi), 1, en, "rectifications"))
 
-    def cayley(self, start: list[str]) -> None:
+    def cayley(self, start: list[str], variant: str | None = None) -> None:
+        """Cayley's equations; with ``variant`` (:mod:`.tilt`), on that working frame, with
+        the terminal event that hands the run over to the other."""
         r, rdot, rho, h, Theta, Sigma, Phi = hy.make_vars(*CAYLEY)
         turns = self._revolutions(start, rho)
         u = turns.angle(rho) - Sigma
-        axes, _ = eq.cayley_axes(Theta, Phi, u, self.plane)
+        if variant is None:
+            axes, _ = eq.cayley_axes(Theta, Phi, u, self.plane)
+            partials = self._partials(r, axes)
+            rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
+            rhs += eq.plane_rates(u, h, Phi, partials[2], self.plane, Theta)
+            self.system = list(zip([r, rdot, rho, h, Theta, Sigma, Phi], rhs, strict=True))
+            self.initial = start
+            self._kinematics(r, rdot, h, axes)
+            values = [r, rdot, turns.rho(rho), h, Theta, Sigma, Phi]
+            self.outputs.update(zip(CAYLEY, values, strict=True))
+            self.node_function = hy.sin(u)
+            return
+        # Allocated alike in both variants: they share one parameter table.
+        eps = self.equatorial_limit()
+        cos, sin = FRAME[variant]
+        c, s = self.pars.add("orbit.frame_cos", cos), self.pars.add("orbit.frame_sin", sin)
+        self.pars.add("orbit.theta_before", "0")
+        self.pars.add("orbit.sigma_before", "0")
+        tilted = variant == TILTED
+        general, _ = eq.cayley_axes(Theta, Phi, u, self.plane, (c, s))
+        axes = general if tilted else eq.cayley_axes(Theta, Phi, u, self.plane)[0]
         partials = self._partials(r, axes)
         rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
-        rhs += eq.plane_rates(u, h, Phi, partials[2], self.plane, Theta)
+        rhs += eq.plane_rates(u, h, Phi, partials[2], self.plane, Theta, (c, s) if tilted else None)
         self.system = list(zip([r, rdot, rho, h, Theta, Sigma, Phi], rhs, strict=True))
         self.initial = start
-        self._kinematics(r, rdot, h, axes)
-        values = [r, rdot, turns.rho(rho), h, Theta, Sigma, Phi]
+        # Outputs, monitors and recorded events: one expression for both variants.
+        self._kinematics(r, rdot, h, general)
+        n = reference_normal(Theta, Phi, c, s)
+        on_reference = hy.atan2(hy.sqrt(n[0] * n[0] + n[1] * n[1]), n[2])
+        undefined = c / c  # 1 on the reference plane, NaN tilted (Θ, Σ are not carried)
+        values = [r, rdot, turns.rho(rho), h, Theta * undefined, Sigma * undefined]
+        values.append(c * Phi + s * on_reference)
         self.outputs.update(zip(CAYLEY, values, strict=True))
-        self.node_function = hy.sin(u)
-        limit = self.orbit.equatorial_limit
-        plane_turns = self.plane is not None and (
-            self.plane.theta_rate is not None or self.plane.phi_rate is not None
-        )
-        if exact_fraction(limit) > 0 and (self.perturbed or plane_turns):
-            eps = self.equatorial_limit()
-            stop = TerminalSpec(hy.sin(Phi) - eps, -1, _EquatorialStop(limit), "equatorial_stops")
-            self.terminal.append(stop)
+        if tilted:
+            self.node_function = vectors.dot(self._plane_normal(), general.radial)
+            back = sin2_on_reference(Theta, Phi, c, s) - 4 * eps * eps
+            turn = EquatorialHandover(LEVEL, self.pars, self.precision)
+            self.terminal.append(TerminalSpec(back, 1, turn, "equatorial_handovers"))
+        else:
+            self.node_function = hy.sin(u)
+            turn = EquatorialHandover(TILTED, self.pars, self.precision)
+            self.terminal.append(TerminalSpec(hy.sin(Phi) - eps, -1, turn, "equatorial_handovers"))
 
     def quaternion(self, start: list[str]) -> None:
         r, rdot, rho, h = hy.make_vars(*CAYLEY[:4])
@@ -336,22 +427,6 @@ class _Builder:
             return [hy.expression(0.0), hy.expression(0.0), hy.expression(1.0)]
         M01 = self.plane.matrix()
         return [M01[0][2], M01[1][2], M01[2][2]]
-
-
-class _EquatorialStop:
-    """Terminal-event handler: end the run, naming the way on."""
-
-    def __init__(self, limit: Any) -> None:
-        self.limit = limit
-
-    def __call__(self, ta: Any, pars: Any) -> str:
-        return (
-            f"the orbit plane reached sin Φ = orbit.equatorial_limit = {self.limit} at "
-            f"t = {ta.time}: below it Θ and Σ lose accuracy like ε/sin Φ (cosec Φ in their "
-            "equations). Results are kept up to here; continue with formulation = 'quaternion' "
-            "(regular at every inclination) or 'cartesian', or lower orbit.equatorial_limit to "
-            "accept the loss"
-        )
 
 
 # ---------------------------------------------------------------------- reference plane
@@ -493,13 +568,14 @@ def _events(scene: Scene, orbit: Orbit, b: _Builder, pars: ParTable) -> list[Eve
                 )
             labels = {-1: "approach", 1: "recede"}
             spec = EventSpec(name, "equatorial", _equatorial_function(b), labels=labels)
-            stop = next((t for t in b.terminal if t.counter == "equatorial_stops"), None)
-            if stop is None:
-                events.append(spec)
-            else:
-                # The run starts above the limit and stops at its first approach: that stop
-                # is the one occurrence, logged by the engine.
-                stop.records = spec
+            for handover in (t for t in b.terminal if t.counter == "equatorial_handovers"):
+                spec.alternating = True
+                if handover.direction == -1:
+                    # The hand-over to the tilted frame is this event's approach: logged by
+                    # it, whichever side of it the root searches (this variant's, and the
+                    # tilted one's at its start) find the zero.
+                    handover.records = spec
+            events.append(spec)
         elif name in scene.events:
             ev = scene.events[name]
             expr = parse_expression(ev.expression, b.outputs, pars, f"events.{name}.expression")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 from ..core.errors import SceneError
@@ -13,7 +14,8 @@ from ..mechanics.kepler import ELEMENT_KEYS
 from .disturbing import ThirdBody, Zonal, parse_perturbations
 
 FORMULATIONS = ("cayley", "quaternion", "cartesian", "encke")
-#: Default of ``orbit.equatorial_limit``: below this sin Φ the Cayley angles stop (see docs).
+#: Default of ``orbit.equatorial_limit``: below this sin Φ the Cayley angles are carried on a
+#: tilted working frame (:mod:`.tilt`; docs/orbits.md, "Near-equatorial orbits").
 EQUATORIAL_LIMIT = "1e-3"
 
 
@@ -62,7 +64,8 @@ class Orbit:
     sigma0
         Gauge Σ at the start time (where the departure point sits on the orbit).
     equatorial_limit
-        The Cayley formulation stops when sin Φ falls to this value (0: never); the
+        ε in [0, ¼]: where sin Φ falls to ε the Cayley formulation hands over to a tilted
+        working frame, and back where it rises to 2ε (0: never; :mod:`.tilt`); the
         ``equatorial`` event of any formulation records where sin Φ crosses it.
     perturbations
         Disturbing-function terms (:mod:`.disturbing`).
@@ -104,8 +107,13 @@ class Orbit:
             raise SceneError("orbit.sigma0", f"has no meaning for formulation = {formulation!r}")
         sigma0 = number(table.get("sigma0", 0), "orbit.sigma0")
         limit = number(table.get("equatorial_limit", EQUATORIAL_LIMIT), "orbit.equatorial_limit")
-        if not 0 <= exact_fraction(limit) < 1:
-            raise SceneError("orbit.equatorial_limit", f"must be in [0, 1), got {limit}")
+        if not 0 <= exact_fraction(limit) <= Fraction(1, 4):
+            # Above ¼ the tilted frame would itself come near its plane (sin Φ_W ≥ √(1 − 4ε²)).
+            raise SceneError(
+                "orbit.equatorial_limit",
+                f"must be in [0, 1/4] (sin Φ where the Cayley angles hand over to a tilted "
+                f"frame, and back at twice it), got {limit}",
+            )
         perturbations = parse_perturbations(tables.get("perturbations", {}))
         plane = (
             PlaneMotion.parse(tables["reference_plane"]) if "reference_plane" in tables else None

@@ -17,8 +17,11 @@ _NAMES = {
     "rdot": "radial velocity ṙ",
     "rho": "departure ρ: the angle from the orbit plane's departure point (continuous)",
     "h": "h = |x × v|, twice the areal velocity",
-    "Theta": "Θ, longitude of the orbit plane's node on the reference plane",
-    "Sigma": "Σ, departure of the node from the departure point",
+    "Theta": (
+        "Θ, longitude of the orbit plane's node on the reference plane (cayley: NaN where "
+        "sin Φ < orbit.equatorial_limit, the angles carried on a tilted frame)"
+    ),
+    "Sigma": "Σ, departure of the node from the departure point (NaN where Θ is)",
     "Phi": "Φ, inclination of the orbit plane to the reference plane",
     "qw": "orbit-frame quaternion, scalar part (quaternion formulation)",
     "qx": "orbit-frame quaternion, x component",

@@ -71,7 +71,10 @@ MODES = ("batch", "threads", "serial")
 _TERMINAL_HINTS = {
     "rebasings": "the Rodrigues chart's re-basing; use attitude.formulation = 'quaternion'",
     "revolutions": "the count of ρ's revolutions; use orbit.formulation = 'cartesian'",
-    "equatorial_stops": "the equatorial stop; use orbit.formulation = 'cartesian'",
+    "equatorial_handovers": (
+        "the hand-over of Cayley's angles near the reference plane; use orbit.formulation = "
+        "'cartesian'"
+    ),
     "rectifications": "Encke's rectification; use orbit.formulation = 'cartesian'",
 }
 # Members per task handed to a worker: large enough that the task overhead (a queue

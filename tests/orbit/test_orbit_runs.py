@@ -23,14 +23,13 @@ from __future__ import annotations
 
 import copy
 import math
-import re
 
 import mpmath
 import numpy as np
 import orbit_cases
 import pytest
 
-from cayley_heyoka import IntegrationError, Scene, load_result, run
+from cayley_heyoka import Scene, load_result, run
 from cayley_heyoka.core.families import FAMILIES
 
 EPS = 2.0**-52
@@ -395,33 +394,6 @@ def crossing_times() -> tuple[float, float]:
 EQUATORIAL_DT = 3 * EPS / (float(LIMIT) * float(PHI_RATE))
 
 
-def test_cayley_stops_at_the_equatorial_limit():
-    t_star, _ = crossing_times()
-    with pytest.raises(IntegrationError, match="quaternion") as info:
-        run(Scene.from_dict(equatorial_scene("cayley")))
-    partial = info.value.result
-    assert not partial.success and partial.counters["equatorial_stops"] == 1
-    # rows up to the last output time before t* = 9.98, none after
-    t = np.asarray(partial.t, dtype=float)
-    assert t[-1] <= t_star < t[-1] + 0.5 and len(t) == 20
-    stop = float(re.search(r"at t = ([-+.\deE]+)", partial.message).group(1))
-    assert abs(stop - t_star) < EQUATORIAL_DT
-    # what was kept is right: Φ = i − φ′ on the rows (the plane angles move, not the orbit)
-    expected_phi = float(INCLINATION) - float(PHI_RATE) * t
-    assert np.max(np.abs(partial["Phi"] - expected_phi)) < 4 * EPS * math.sqrt(
-        partial.counters["steps"]
-    )
-
-
-def test_cayley_records_the_approach_it_stops_at():
-    t_star, _ = crossing_times()
-    with pytest.raises(IntegrationError) as info:
-        run(Scene.from_dict(equatorial_scene("cayley")))
-    ev = info.value.result.events["equatorial"]
-    assert list(ev.label) == ["approach"]
-    assert abs(float(ev.time[0]) - t_star) < EQUATORIAL_DT
-
-
 @pytest.mark.parametrize("formulation", ["quaternion", "cartesian"])
 def test_regular_formulations_pass_the_equatorial_limit(formulation):
     """The same scene runs to the end; the equatorial event records the approach and the
@@ -429,7 +401,7 @@ def test_regular_formulations_pass_the_equatorial_limit(formulation):
     t_star, t_recede = crossing_times()
     res = run(Scene.from_dict(equatorial_scene(formulation)))
     assert res.success and len(res.t) == 41
-    assert "equatorial_stops" not in res.counters
+    assert "equatorial_handovers" not in res.counters
     ev = res.events["equatorial"]
     assert list(ev.label) == ["approach", "recede"]
     assert list(ev.direction) == [-1, 1]

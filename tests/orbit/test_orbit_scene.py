@@ -54,7 +54,8 @@ def test_valid_scene_parses_with_defaults():
         ({"orbit.position": [0, 0, 0]}, "orbit.position", "origin"),
         ({"orbit.formulation": "kepler"}, "orbit.formulation", "one of"),
         ({"orbit.fomulation": "cayley"}, "orbit.fomulation", "did you mean 'formulation'"),
-        ({"orbit.equatorial_limit": "1"}, "orbit.equatorial_limit", r"\[0, 1\)"),
+        ({"orbit.equatorial_limit": "1"}, "orbit.equatorial_limit", r"\[0, 1/4\]"),
+        ({"orbit.equatorial_limit": "0.26"}, "orbit.equatorial_limit", r"\[0, 1/4\]"),
         ({"perturbations.zonal.radius": "-0.8"}, "perturbations.zonal.radius", "> 0"),
         ({"perturbations.zonal.J1": "0.1"}, "perturbations.zonal.J1", "degree"),
         ({"perturbations.zonal.axis": [0, 0, 0]}, "perturbations.zonal.axis", "nonzero"),
@@ -107,8 +108,14 @@ def test_elements_input_checks_the_eccentricity():
         Scene.from_dict(d)
 
 
-def test_cayley_refuses_a_start_near_the_reference_plane():
+def test_cayley_starts_near_the_reference_plane_on_the_tilted_frame():
+    """Below the limit the run starts on the tilted working frame (orbit/tilt.py); without a
+    limit, an orbit exactly in the plane is refused (0/0 in dΘ/dt)."""
     d = scene(**{"orbit.velocity": ["-0.2", "0.9", "1e-5"], "orbit.position": ["1", "0", "0"]})
+    model = FAMILIES["orbit"].build(Scene.from_dict(d))
+    assert model.variant == "tilted" and model.pars.values[model.pars.index("orbit.frame_sin")]
+    d = scene(**{"orbit.velocity": ["-0.2", "0.9", "0"], "orbit.position": ["1", "0", "0"]})
+    d["orbit"]["equatorial_limit"] = "0"
     with pytest.raises(SceneError, match="quaternion") as info:
         Scene.from_dict(d)
     assert info.value.field == "orbit.formulation"
