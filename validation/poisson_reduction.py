@@ -6,10 +6,12 @@ Three tops whose force sees one direction (the vertical): the bundled heavy top
 (examples/heavy_top.toml's body), a Lagrange top (A = B, centre of mass on the axis) and
 Kovalevskaya's top (A = B = 2C, centre of mass in the equatorial plane), each integrated over
 the same span in double at the default tolerance by ``formulation = "poisson"`` (the rates and
-γ = Rᵀu: six equations), ``"quaternion"`` (seven) and ``"rodrigues"`` (six and chart
-re-basings). For each: the Taylor steps, the wall time of a whole ``cayley_heyoka.run()``
-(compiled code cached; the least of interleaved repeats, the least disturbed, so the three
-see the same machine state), and the largest error of the rates and of γ at the output times
+γ = Rᵀu: six equations), the same with ``output.azimuth = true`` (the azimuth about u by
+quadrature, seven, the whole attitude: cayley_heyoka/rotation/azimuth.py), ``"quaternion"``
+(seven) and ``"rodrigues"`` (six and chart re-basings). For each: the Taylor steps, the wall
+time of a whole ``cayley_heyoka.run()`` (compiled code cached; the least of interleaved
+repeats, the least disturbed, so that all see the same machine state), and the largest error
+of the rates, of γ and of the attitude quaternion (sign chosen with w ≥ 0) at the output times
 against a quad run of the quaternion formulation — an independent formulation in another
 precision.
 """
@@ -25,7 +27,7 @@ import numpy as np
 import cayley_heyoka as ch
 
 HERE = Path(__file__).resolve().parent
-FORMULATIONS = ("poisson", "quaternion", "rodrigues")
+FORMULATIONS = ("poisson", "poisson + azimuth", "quaternion", "rodrigues")
 TOPS = {
     "heavy top (examples/heavy_top.toml)": ((1.0, 1.6, 2.3), (0.1, -0.05, 0.3), (0.3, 1.0, 0.5)),
     "Lagrange top (A = B, c on the axis)": ((1.0, 1.0, 0.5), (0.0, 0.0, 0.4), (0.3, 0.2, 4.0)),
@@ -36,6 +38,9 @@ SPAN = 100.0
 
 def scene(top: str, formulation: str, precision: str = "double") -> ch.Scene:
     inertia, com, rates = TOPS[top]
+    output: dict = {"times": {"start": 0, "stop": SPAN, "count": 31}}
+    if formulation == "poisson + azimuth":
+        formulation, output["azimuth"] = "poisson", True
     return ch.Scene.from_dict(
         {
             "body": {"inertia": list(inertia)},
@@ -43,7 +48,7 @@ def scene(top: str, formulation: str, precision: str = "double") -> ch.Scene:
             "forces": {"heavy_top": {"weight": 1.0, "center_of_mass": list(com)}},
             "attitude": {"formulation": formulation},
             "integrator": {"precision": precision},
-            "output": {"times": {"start": 0, "stop": SPAN, "count": 31}},
+            "output": output,
         }
     )
 
@@ -57,6 +62,14 @@ def gamma(result: ch.Result) -> np.ndarray:
     return np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
 
 
+def quaternion(result: ch.Result) -> np.ndarray | None:
+    """The attitude quaternion with w ≥ 0 (q and −q are one attitude), or None without one."""
+    if "qw" not in result.variables:
+        return None
+    q = np.array([[float(x) for x in result[n]] for n in ("qw", "qx", "qy", "qz")])
+    return q * np.where(q[0] < 0, -1.0, 1.0)
+
+
 def rates(result: ch.Result) -> np.ndarray:
     return np.array([[float(x) for x in result[n]] for n in "pqr"])
 
@@ -66,6 +79,7 @@ def measure(repeats: int) -> list[dict]:
     for top in TOPS:
         reference = ch.run(scene(top, "quaternion", "quad"))
         ref_rates, ref_gamma = rates(reference), gamma(reference)
+        ref_q = quaternion(reference)
         scenes = {f: scene(top, f) for f in FORMULATIONS}
         results = {f: ch.run(s) for f, s in scenes.items()}  # compiles (or loads) once
         walls: dict[str, list[float]] = {f: [] for f in FORMULATIONS}
@@ -83,6 +97,9 @@ def measure(repeats: int) -> list[dict]:
                     "wall": min(walls[f]),
                     "rates": float(np.max(np.abs(rates(r) - ref_rates))),
                     "gamma": float(np.max(np.abs(gamma(r) - ref_gamma))),
+                    "attitude": None
+                    if (q := quaternion(r)) is None
+                    else float(np.max(np.abs(q - ref_q))),
                 }
             )
     return rows
@@ -99,8 +116,9 @@ def table(rows: list[dict], repeats: int) -> str:
         "motion's sensitivity in every formulation alike); wall: the least of the repeats, "
         "interleaved; the ratio is to the quaternion's time on the same top.",
         "",
-        "| top | formulation | steps | wall (ms) | time / quaternion's | rates error | γ error |",
-        "|---|---|---|---|---|---|---|",
+        "| top | formulation | steps | wall (ms) | time / quaternion's | rates error | γ error "
+        "| attitude error |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for row in rows:
         quaternion = next(
@@ -108,7 +126,8 @@ def table(rows: list[dict], repeats: int) -> str:
         )
         lines.append(
             f"| {row['top']} | {row['formulation']} | {row['steps']} | {1e3 * row['wall']:.2f} "
-            f"| {row['wall'] / quaternion['wall']:.2f} | {row['rates']:.1e} | {row['gamma']:.1e} |"
+            f"| {row['wall'] / quaternion['wall']:.2f} | {row['rates']:.1e} | {row['gamma']:.1e} "
+            f"| {'–' if row['attitude'] is None else format(row['attitude'], '.1e')} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -10,7 +10,7 @@ FAMILY = Family(
     ("body", "initial", "attitude", "forces"),
     later("cayley_heyoka.rotation.scene", "RigidBody.parse"),
     later("cayley_heyoka.rotation.model", "build_model"),
-    output_keys=("invariable_angle",),
+    output_keys=("invariable_angle", "azimuth"),
     consistency_check=later("cayley_heyoka.rotation.closed_form_check", "check_rotation"),
     closed_form=later("cayley_heyoka.rotation.free_body_reference", "closed_form"),
     plot_kinds=("polhode", "crossings"),

@@ -23,8 +23,8 @@ from ..core.model import EventSpec, Model, ParTable, TerminalSpec
 from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
 from . import attitude as att
+from . import azimuth, invariable_angle, poisson
 from . import equations as eq
-from . import invariable_angle, poisson
 from .charts import RodriguesAtlas, kappa_limit
 from .forces import ForceContext, HeavyTop
 from .scene import RigidBody
@@ -78,6 +78,14 @@ def build_model(scene: Scene) -> Model:
         initial = initial + list(attitude.initial)
         outputs.update(attitude.outputs)
         terminal = list(attitude.terminal)
+    if azimuth.wanted(scene.output.options, body.formulation):
+        gamma = attitude.variables
+        az = azimuth.Azimuth(pars, prec, attitude.u, q0, attitude.initial, rates0, len(system), 3)
+        s = hy.make_vars("azimuth_reduced")
+        system.append((s, az.rhs(gamma, rates)))
+        initial = [*initial, prec.number(0)]
+        outputs.update(az.attitude(s, gamma))
+        terminal += az.terminal(s, gamma)
     if invariable_angle.wanted(scene.output.options):
         if not body.torque_free:
             raise SceneError(
@@ -108,7 +116,7 @@ def build_model(scene: Scene) -> Model:
     events = _events(scene, body, inertia, rates, attitude, outputs, pars)
     model = Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
     # tan(θ/2) n is infinite at a half-turn in both formulations: the attitude is fine there.
-    model.unbounded = RODRIGUES if attitude and "lambda" in attitude.outputs else ()
+    model.unbounded = RODRIGUES if "lambda" in outputs else ()
     return model
 
 
@@ -132,6 +140,7 @@ class _Attitude:
         self.plane_events: Callable[[], list[Any]] | None = None
         # The Euler–Poisson reduction's γ: no attitude matrix, only the forces' direction.
         self.direction: list[Any] | None = None
+        self.u: Any = None  # the poisson formulation's space direction
 
 
 def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
@@ -218,7 +227,7 @@ def _poisson(body, prec, pars, rates, q0, inertia) -> _Attitude:
     a.potential = force_function(body, poisson.frame(u, gamma, prec), [zero] * 3, inertia, pars)
     a.torque = poisson.torque(a.potential, gamma)
     a.outputs = dict(zip(poisson.GAMMA, gamma, strict=True))
-    a.direction = gamma
+    a.direction, a.u = gamma, u
     return a
 
 

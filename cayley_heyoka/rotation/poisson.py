@@ -11,8 +11,8 @@ equations):
 six equations instead of the quaternion's seven or the Rodrigues chart's six and its
 re-basing events (``[attitude] formulation = "poisson"``). Conserved: the energy ``T − V``,
 ``|γ|²`` (``direction_norm``, = 1) and the area integral ``L · γ`` (``momentum_vertical``:
-``N · γ = 0``). The azimuth about ``u`` is not integrated; a scene that needs the whole
-attitude uses the quaternion or the chart.
+``N · γ = 0``). The azimuth about ``u`` is not integrated unless ``output.azimuth = true``
+asks for the whole attitude (:mod:`.azimuth`, by quadrature).
 
 The force functions are written on the direction cosines; here they are given the matrix
 ``u γᵀ`` (``R_ij = u_i γ_j``), whose every use ``Rᵀu`` is ``|u|² γ = γ`` and whose third row is
