@@ -39,6 +39,8 @@ _EXPORTS = {
     "generate_reference": "workflows.reference",
     "read_certificate": "workflows.reference",
     "run_sweep": "workflows.sweep",
+    "plan": "workflows.planner",
+    "Plan": "workflows.planner",
     "load_sweep": "workflows.sweep_result",
 }
 #: Public submodules, loaded on first use (``from cayley_heyoka import plots``).
@@ -111,6 +113,7 @@ __all__ = [
     "IntegrationError",
     "Interrupted",
     "OutputError",
+    "Plan",
     "Precision",
     "Result",
     "ResultFileError",
@@ -125,6 +128,7 @@ __all__ = [
     "load_result",
     "load_scene",
     "load_sweep",
+    "plan",
     "plots",
     "propagate_ensemble",
     "read_certificate",

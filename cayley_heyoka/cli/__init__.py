@@ -1,6 +1,7 @@
 """The ``cayley-heyoka`` command: run scenes, check them, summarise result files.
 
-One module per verb (``run``, ``info``, ``check``, ``reference``, ``plot``, ``sweep``), each
+One module per verb (``run``, ``info``, ``check``, ``reference``, ``plot``, ``sweep``,
+``plan``), each
 defining its subcommand with the standard library only and importing its workflow (the engine,
 hence heyoka; h5py; matplotlib; tqdm) when the command runs: ``--help``, ``--version`` and the
 parsing of every command start without them, and no command pays for another's imports.
@@ -19,7 +20,7 @@ from importlib import import_module
 
 #: The verb modules of this package, in the order ``--help`` lists them; each has
 #: ``add_parser(subparsers)``, which sets ``handler`` to the function running the command.
-VERBS: tuple[str, ...] = ("run", "info", "check", "reference", "plot", "sweep")
+VERBS: tuple[str, ...] = ("run", "info", "check", "reference", "plot", "sweep", "plan")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -66,6 +66,9 @@ class Family:
     memoirs
         Keys of :data:`.citation.MEMOIRS`: the memoirs the family's equations implement
         (:func:`cayley_heyoka.cite`).
+    formulations
+        ``("table.key", (value, ...))``: the scene key that picks the family's formulation and
+        the values a planner may try (:mod:`cayley_heyoka.workflows.planner`), or None.
     """
 
     name: str
@@ -82,6 +85,7 @@ class Family:
     variables: Callable[[Mapping[str, Any], str], str | None] | None = None
     references: Mapping[str, str] = field(default_factory=dict)
     memoirs: tuple[str, ...] = ()
+    formulations: tuple[str, tuple[str, ...]] | None = None
 
 
 def later(module: str, name: str) -> Callable[..., Any]:

@@ -15,5 +15,6 @@ FAMILY = Family(
     plot_kinds=("orbit",),
     plots=later("cayley_heyoka.orbit.plots", "plots"),
     variables=later("cayley_heyoka.orbit.variables", "describe"),
+    formulations=("orbit.formulation", ("cartesian", "cayley", "quaternion", "encke")),
     memoirs=("cayley1860",),
 )
