@@ -107,6 +107,13 @@ class Orbit:
             raise SceneError("orbit.sigma0", f"has no meaning for formulation = {formulation!r}")
         sigma0 = number(table.get("sigma0", 0), "orbit.sigma0")
         limit = number(table.get("equatorial_limit", EQUATORIAL_LIMIT), "orbit.equatorial_limit")
+        if 0 < exact_fraction(limit) < Fraction(1, 10**100):
+            # The hand-back compares sin²Φ with (2ε)², which must not underflow.
+            raise SceneError(
+                "orbit.equatorial_limit",
+                f"must be 0 (no hand-over) or at least 1e-100 (no precision resolves the orbit "
+                f"plane to a smaller sin Φ), got {limit}",
+            )
         if not 0 <= exact_fraction(limit) <= Fraction(1, 4):
             # Above ¼ the tilted frame would itself come near its plane (sin Φ_W ≥ √(1 − 4ε²)).
             raise SceneError(

@@ -56,6 +56,7 @@ def test_valid_scene_parses_with_defaults():
         ({"orbit.fomulation": "cayley"}, "orbit.fomulation", "did you mean 'formulation'"),
         ({"orbit.equatorial_limit": "1"}, "orbit.equatorial_limit", r"\[0, 1/4\]"),
         ({"orbit.equatorial_limit": "0.26"}, "orbit.equatorial_limit", r"\[0, 1/4\]"),
+        ({"orbit.equatorial_limit": "1e-300"}, "orbit.equatorial_limit", "at least 1e-100"),
         ({"perturbations.zonal.radius": "-0.8"}, "perturbations.zonal.radius", "> 0"),
         ({"perturbations.zonal.J1": "0.1"}, "perturbations.zonal.J1", "degree"),
         ({"perturbations.zonal.axis": [0, 0, 0]}, "perturbations.zonal.axis", "nonzero"),
