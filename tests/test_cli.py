@@ -49,7 +49,7 @@ def test_failed_run_saves_partial_results(tmp_path, capsys):
 
 def test_orbit_run_through_the_reference_plane_saves_nan_angles(tmp_path, capsys):
     """A Cayley orbit whose reference plane tilts onto it (Φ = 0.5 − 0.05 t) hands over to a
-    tilted frame at sin Φ = 10⁻³ (t ≈ 9.98) and back at 2·10⁻³: exit 0, every row saved, Θ
+    tilted frame at sin Φ = 5·10⁻⁴ (t ≈ 9.99) and back at 2·10⁻³: exit 0, every row saved, Θ
     and Σ NaN on the tilted row (t = 10) and read back as such."""
     scene = tmp_path / "equatorial.toml"
     scene.write_text(

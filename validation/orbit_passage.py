@@ -246,7 +246,7 @@ def report(rows: list[dict], wall: float) -> str:
     lines += [
         "",
         "With the default `equatorial_limit = 1e-3` (rows `cayley, ε = 1e-3`) the Cayley "
-        "formulation hands over to a tilted working frame where sin Φ falls to 1e-3 and back "
+        "formulation hands over to a tilted working frame where sin Φ falls to 5e-4 and back "
         "where it rises to 2e-3; Θ and Σ are NaN on the rows between (the angle columns above "
         "are over the rows that report them). The `equatorial` event against the exact "
         "crossings of sin Φ = 1e-3:",

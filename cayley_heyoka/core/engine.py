@@ -521,13 +521,13 @@ class Propagation:
         stop = spec.handle(ta, self._pars)
         self._ta_pars[:] = self._pars[: self._held]
         self.counters[spec.counter] += 1
-        if spec.records is not None and stop is not None:
-            self._logged.append((spec.records, t, spec.direction))
         if isinstance(stop, Handover):
             self._handover = stop  # taken over when heyoka's call returns (_propagate)
             return False
         if stop is not None:
             self.status, self.message = -1, stop
+            if spec.records is not None:
+                self._logged.append((spec.records, t, spec.direction))
             return False
         if self._signals.received:
             # A signal noted while the parameters were copied back: its poison was overwritten.

@@ -71,10 +71,7 @@ class EventSpec:
 
     ``direction`` is 0 (any), +1 (upwards only) or -1 (downwards only); ``label`` says what
     fired (e.g. the body axis), several specs may share one ``name``; ``labels`` replaces it
-    by direction of crossing (e.g. ``{1: "ascending", -1: "descending"}``). ``alternating``:
-    the crossings of a continuous function through a level, whose directions alternate, so
-    that a repeated direction is one zero found twice (by a terminal event that stands for it
-    and by the next variant of the model: :class:`Handover`), logged once.
+    by direction of crossing (e.g. ``{1: "ascending", -1: "descending"}``).
     """
 
     name: str
@@ -82,7 +79,6 @@ class EventSpec:
     expression: Expr
     direction: int = 0
     labels: dict[int, str] | None = None
-    alternating: bool = False
 
     def label_for(self, direction: int) -> str:
         """The label of an occurrence crossing zero in ``direction``."""
@@ -101,8 +97,8 @@ class TerminalSpec:
     :class:`Handover`, and the run goes on from there with another variant of the model.
     ``counter`` names the tally of
     its occurrences in :attr:`Result.counters`. ``records``, if given, is the recorded event
-    this stop (or hand-over) stands for: it is logged as its occurrence (the same zero found
-    twice, by two root searches, could otherwise land either side of the stop).
+    this stop stands for: the stop is logged as its occurrence (the same zero found twice, by
+    two root searches, could otherwise land either side of the stop).
 
     A handler that keeps state of its own between calls (not in ``pars``) exposes it as
     ``checkpoint() -> JSON value`` and ``resume(value)``, so that an interrupted run continues

@@ -152,10 +152,6 @@ def logs_of(
         ]
     for spec, t, d in logged:
         gathered.setdefault(spec.name, []).append((t, d, spec.label_for(d)))
-    alternating = {spec.name for spec in model.events if spec.alternating}
-    for name in alternating & gathered.keys():
-        items = sorted(gathered[name], key=lambda x: x[0])
-        gathered[name] = [x for k, x in enumerate(items) if k == 0 or x[1] != items[k - 1][1]]
     logs = {}
     for name, items in gathered.items():
         items.sort(key=lambda x: x[0])

@@ -364,8 +364,11 @@ class _Builder:
             self.terminal.append(TerminalSpec(back, 1, turn, "equatorial_handovers"))
         else:
             self.node_function = hy.sin(u)
+            # At ε/2, not ε: the tilted variant then starts clear of the equatorial event's
+            # zero, which a root search starting on it could miss with the next one.
             turn = EquatorialHandover(TILTED, self.pars, self.precision)
-            self.terminal.append(TerminalSpec(hy.sin(Phi) - eps, -1, turn, "equatorial_handovers"))
+            down = 2 * hy.sin(Phi) - eps
+            self.terminal.append(TerminalSpec(down, -1, turn, "equatorial_handovers"))
 
     def quaternion(self, start: list[str]) -> None:
         r, rdot, rho, h = hy.make_vars(*CAYLEY[:4])
@@ -568,13 +571,6 @@ def _events(scene: Scene, orbit: Orbit, b: _Builder, pars: ParTable) -> list[Eve
                 )
             labels = {-1: "approach", 1: "recede"}
             spec = EventSpec(name, "equatorial", _equatorial_function(b), labels=labels)
-            for handover in (t for t in b.terminal if t.counter == "equatorial_handovers"):
-                spec.alternating = True
-                if handover.direction == -1:
-                    # The hand-over to the tilted frame is this event's approach: logged by
-                    # it, whichever side of it the root searches (this variant's, and the
-                    # tilted one's at its start) find the zero.
-                    handover.records = spec
             events.append(spec)
         elif name in scene.events:
             ev = scene.events[name]

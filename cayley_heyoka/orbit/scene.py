@@ -64,7 +64,7 @@ class Orbit:
     sigma0
         Gauge Σ at the start time (where the departure point sits on the orbit).
     equatorial_limit
-        ε in [0, ¼]: where sin Φ falls to ε the Cayley formulation hands over to a tilted
+        ε in [0, ¼]: where sin Φ falls to ε/2 the Cayley formulation hands over to a tilted
         working frame, and back where it rises to 2ε (0: never; :mod:`.tilt`); the
         ``equatorial`` event of any formulation records where sin Φ crosses it.
     perturbations

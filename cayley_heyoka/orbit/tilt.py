@@ -1,8 +1,10 @@
 """Cayley's angles near Φ = 0 and π: the hand-over to a tilted working frame and back.
 
 Near the reference plane Θ and Σ are ill-defined and their equations carry cosec Φ
-(docs/orbits.md, "Near-equatorial orbits"). Where sin Φ falls to ε = ``orbit.equatorial_limit``
-a terminal event hands the run over to a *working frame* W tilted by a quarter turn about the
+(docs/orbits.md, "Near-equatorial orbits"). Where sin Φ falls to ε/2, ε =
+``orbit.equatorial_limit`` (not ε itself: the tilted stretch then starts clear of the
+``equatorial`` event's zero, which a root search starting on it missed with the next one), a
+terminal event hands the run over to a *working frame* W tilted by a quarter turn about the
 reference plane's x₁ axis, ``W = R₁(β)`` with ``(cos β, sin β) = (c, s)`` held in runtime
 parameters: the same equations, with Θ, Σ, Φ the angles of the orbit plane on W's xy-plane,
 where the orbit is nearly perpendicular to it (sin Φ_W ≥ √(1 − 4ε²)). Where sin Φ on the
@@ -11,9 +13,9 @@ that a plane hovering near ε does not switch at every step.
 
 Each stretch compiles only what it needs (:class:`cayley_heyoka.core.model.Handover`): the run
 starts with Cayley's equations on the reference plane, and the tilted variant is compiled the
-first time a run reaches ε. Tilted, W's axes enter the equations (``R₁(β)`` on the orbit's
-axes, and the reference plane's angular velocity A, B, C referred to W), which costs about a
-third more per step than the untilted equations with J₂ alone (``step_cost`` in
+first time a run reaches ε/2. Tilted, W's axes enter the equations (``R₁(β)`` on the orbit's
+axes, and the reference plane's angular velocity A, B, C referred to W), which costs 1.25–1.35×
+per step of the untilted equations with J₂ alone (``step_cost`` in
 validation/orbit_passage.py); the untilted variant keeps its own code. Outputs, monitors and
 events are the same expressions in both, of the parameters (c, s): ``x`` … ``vz``, ρ, h, r and
 Φ stay continuous across a hand-over; Θ and Σ, which the tilted state does not carry on the

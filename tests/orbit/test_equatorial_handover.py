@@ -258,3 +258,16 @@ def test_regular_formulations_pass_the_plane_with_the_same_events(formulation):
         # O(1) products (at Φ = 0 too: the absolute error of √(m₁₃² + m₂₃²) is ~ε).
         expected = np.array([float(p) for p in exact["phi"]])
         assert np.max(np.abs(np.asarray(res["Phi"], dtype=float) - expected)) < 8 * EPS
+
+
+def test_every_passage_is_logged_over_many_passages():
+    """Over t = 330 the turning plane passes through the orbit six times (every π/φ̇′, near
+    Φ = 0 and Φ = π alike): six approaches and six recessions, alternating, and two hand-overs
+    each. (With the hand-over at ε itself, the tilted stretch started on the event's zero and
+    the search lost the recession at t ≈ 198.5.)"""
+    d = scene()
+    d["output"] = {"times": {"start": "0", "stop": "330", "count": 661}, "events": ["equatorial"]}
+    res = run(d)
+    ev = res.events["equatorial"]
+    assert list(ev.label) == ["approach", "recede"] * 6
+    assert res.counters["equatorial_handovers"] == 12
