@@ -62,12 +62,23 @@ def test_the_extrapolation_meets_the_runs_it_predicts(body_plan):
     assert 0.1 <= route.invariants / drift <= 10, (route.invariants, drift)
 
 
-def test_an_error_no_route_reaches_names_the_closest_and_the_bits():
-    p = planner.plan(ch.Scene.from_dict(BODY), 1e-40, formulations=["quaternion"])
-    assert p.recommended is None
+def test_an_error_no_route_reaches_names_the_closest_and_the_bits(body_plan):
+    p = body_plan.for_error(1e-40)
+    assert p.recommended is None and p.routes is body_plan.routes
     assert "no route reaches 1e-40" in p.message and "bits" in p.message
     bits = int(p.message.split("about ")[-1].split(" bits")[0])
     assert 130 < bits < 200
+
+
+def test_another_request_on_the_same_routes_recommends_afresh(body_plan):
+    loose = body_plan.for_error(1.0, "invariants")
+    assert loose.quantity == "invariants" and loose.recommended is body_plan.routes[0]
+    again = loose.for_error(body_plan.error, "state")
+    assert again.recommended is body_plan.recommended and again.message == body_plan.message
+    with pytest.raises(ValueError, match="error must be a number > 0"):
+        body_plan.for_error(0)
+    with pytest.raises(ValueError, match="quantity must be one of"):
+        body_plan.for_error(1e-9, "phase")
 
 
 @pytest.mark.parametrize(
