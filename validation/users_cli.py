@@ -54,8 +54,8 @@ def _process(argv: list[str], cwd: Path) -> Callable[[], None]:
 
 def rows(quick: bool) -> list[Row]:
     """One row per command: wall of the command ÷ wall of importing heyoka, each in a fresh
-    process; ``quick`` takes 7 repeats, else 21."""
-    repeats = 7 if quick else 21
+    process; ``quick`` (a smoke run) takes 3 repeats, else 21."""
+    repeats = 3 if quick else 21
     cli, how = command()
     out = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -85,7 +85,7 @@ def rows(quick: bool) -> list[Row]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="7 repeats instead of 21")
+    parser.add_argument("--quick", action="store_true", help="3 repeats instead of 21")
     print(table(rows(parser.parse_args().quick)))
 
 
