@@ -7,6 +7,7 @@ free body over ~10 pilots' worth of steps checks the extrapolation against the r
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -112,3 +113,20 @@ def test_cli_plan_exits_0_with_a_route_1_without_and_2_on_bad_input(tmp_path, ca
     assert "no route reaches" in capsys.readouterr().out
     assert main([*args, "--error", "-1"]) == 2
     assert "error must be a number > 0" in capsys.readouterr().err
+
+
+def test_a_span_shorter_than_a_pilot_is_measured_whole():
+    """~260 steps: the pilot runs the whole span, so the double route's steps are the run's and
+    its error is measured against quad, not extrapolated (a projectile of 2 steps is planned,
+    not refused)."""
+    short = {**BODY, "output": {"times": {"start": "0", "stop": "100", "count": 11}}}
+    p = planner.plan(ch.Scene.from_dict(short), 1e-9, formulations=["quaternion"])
+    route = next(r for r in p.routes if r.precision == "double")
+    run = ch.run(ch.Scene.from_dict(short))
+    truth = ch.run(ch.Scene.from_dict({**short, "integrator": {"precision": "quad"}}))
+    assert route.steps == run.counters["steps"]
+    measured = float(np.max(planner._state_error(run, truth, ("lambda", "mu", "nu"))))
+    # The pilot's 65 output times include the scene's 11: its largest error is at least theirs.
+    assert measured <= route.state <= 10 * measured, (route.state, measured)
+    projectile = ch.load_scene(Path(__file__).parents[1] / "examples" / "projectile.toml")
+    assert planner.plan(projectile, 1e-12).recommended is not None

@@ -17,7 +17,9 @@ own twin in more bits over the same stretch:
   its own pilot;
 * the wall time of ``run()``: a fixed part (a run of one step) and a time per step.
 
-The quad route uses its own steps and time and the double pilot's constants with quad's ε.
+The quad route uses its own steps and time and the double pilot's constants with quad's ε. A
+span shorter than a pilot is run whole: the double route's errors are then the ones measured
+against quad, not extrapolated.
 The cheapest route whose predicted error meets the request is recommended; when none does, the
 plan says what the closest one gives and how many bits (MPFR, ``integrator.precision =
 {bits = N}``) the law asks for. validation/planner.py measures the predictions against whole
@@ -256,16 +258,23 @@ def _pilot(
     # (a run whose first steps are not well inside its budget probes, then starts again).
     d["integrator"]["max_steps"] = 1000 * PILOT_STEPS
     d["output"] = {"times": {"start": t0, "stop": t0 + stretch, "count": PILOT_OUTPUTS}}
-    double = _measure(_with(d, "double"), _with(d, "quad"))
+    # A span shorter than a pilot is run whole: its errors are measured, not extrapolated.
+    whole = stretch >= span
+    # The quad run is the double pilot's twin and quad's own pilot: run once.
+    quad_run = _recorded(_with(d, "quad"))
+    double = _measure(_with(d, "double"), _recorded(_with(d, "double")), quad_run[0], whole)
     # Quad's own steps and time; its constants are double's (its twin would need MPFR).
-    quad = _measure(_with(d, "quad"), None)
+    quad = _measure(_with(d, "quad"), quad_run, None, whole)
     routes = []
     for precision, m in (("double", double), ("quad", quad)):
         eps = m["eps"]
-        steps = max(1, round(m["rate"] * span))
+        steps = m["steps"] if whole else max(1, round(m["rate"] * span))
         c1, c2 = double["c1"], double["c2"]
         invariants = max(c1 * eps * math.sqrt(steps), eps) if not math.isnan(c1) else math.nan
         state = max(c2 * eps * steps**1.5, eps)
+        if whole and precision == "double":
+            state = max(m["state"], eps)
+            invariants = max(m["drift"], eps) if not math.isnan(m["drift"]) else math.nan
         routes.append(
             Route(
                 formulation,
@@ -305,16 +314,24 @@ def _with(d: dict, precision: str) -> dict:
     return out
 
 
-def _measure(mine: dict, twin: dict | None) -> dict[str, float]:
-    """One pilot: its rate of steps and wall per step, and with a twin in more bits the
-    constants of the two laws."""
+def _recorded(d: dict) -> tuple[Any, list[float]]:
+    """A run of ``d`` and the time after each of its steps."""
     times: list[float] = []
-    result = _run(mine, progress=times.append)
+    return _run(d, progress=times.append), times
+
+
+def _measure(
+    mine: dict, recorded: tuple[Any, list[float]], truth: Any | None, whole: bool
+) -> dict[str, float]:
+    """One pilot (``recorded``: its run of ``mine``): its rate of steps and wall per step, and
+    with a ``truth`` in more bits the constants of the two laws and, for a ``whole`` span, the
+    largest errors themselves."""
+    result, times = recorded
     scene = Scene.from_dict(mine)
     eps = float(scene.integrator.precision.epsilon)
     steps = result.counters["steps"]
     t = np.asarray(result.t, dtype=float)
-    if steps < 16 or len(t) < 8:
+    if steps < 1 or (not whole and (steps < 16 or len(t) < 8)):
         raise _Unfit(f"the pilot took {steps} steps only")
     # n(t): the progress callback reports the time after each step.
     n = np.interp(t, np.asarray(times, dtype=float), np.arange(1, len(times) + 1), left=1)
@@ -328,23 +345,26 @@ def _measure(mine: dict, twin: dict | None) -> dict[str, float]:
     fixed, wall = _least(Scene.from_dict(first)), _least(scene)
     out = {
         "eps": eps,
+        "steps": steps,
         "rate": steps / (t[-1] - t[0]),
         "fixed": fixed,
         "per_step": max(wall - fixed, 0.0) / steps,
     }
-    if twin is None:
+    if truth is None:
         return out
     skip = FAMILIES[scene.family].build(scene).unbounded
-    error = _state_error(result, _run(twin), skip)
+    error = _state_error(result, truth, skip)
+    out["state"] = float(np.max(error))
     out["c2"] = float(np.max(error[late] / (eps * n[late] ** 1.5)))
     drifts = [
         np.max(np.abs(np.asarray(result.drift(k), dtype=float)).reshape(len(t), -1), axis=1)
         for k in result.conserved
     ]
-    out["c1"] = math.nan
+    out["c1"] = out["drift"] = math.nan
     if drifts:
         worst = np.max(np.array(drifts), axis=0)
         out["c1"] = float(np.max(worst[late] / (eps * np.sqrt(n[late]))))
+        out["drift"] = float(np.max(worst))
     return out
 
 
@@ -429,6 +449,8 @@ def _advice(routes: list[Route], best: Route | None, error: float, quantity: str
 
 
 def _seconds(s: float) -> str:
+    if s < 0.01:
+        return f"{1e3 * s:.2g} ms"
     if s < 1:
         return f"{1e3 * s:.0f} ms"
     if s < 3600:
