@@ -106,6 +106,8 @@ def test_other_refusals():
     )
     refuse(free_body(forces={"magnetic": {}}), "forces.magnetic", "unknown key")
     refuse({"output": {"times": [0, 1]}}, "scene", "names no model family")
+    # A study given where a scene is expected: the verb that takes it.
+    refuse({"scene": "s.toml", "sweep": {"kind": "grid"}}, "scene", "cayley-heyoka sweep")
 
 
 def test_expression_errors_name_the_field():

@@ -203,6 +203,12 @@ def family_of(data: Mapping[str, Any]) -> str:
     if len(found) == 1:
         return found[0]
     expected = ", ".join(f"[{f.key_table}] ({f.name})" for f in families)
+    if not found and "sweep" in data:
+        raise SceneError(
+            "scene",
+            "is a study (it has a [sweep] table), not a scene: run it with `cayley-heyoka sweep` "
+            "(in Python, `run_sweep`)",
+        )
     if not found:
         also = "".join(f"; {b}" for b in broken)
         raise SceneError(
