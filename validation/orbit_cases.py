@@ -315,6 +315,24 @@ LONG = (
 )
 LONG_BY_NAME = {c.name: c for c in LONG}
 
+# The J₂ orbit timed by orbit_passage.py (step cost) and planned by planner.py: e = 0.1,
+# i = 0.5, J₂ of the Earth on a body of radius 0.8.
+J2_ORBIT = {
+    "orbit": {
+        "mu": "1",
+        "elements": {
+            "a": "1",
+            "e": "0.1",
+            "inclination": "0.5",
+            "node": "0.3",
+            "argument_of_pericentre": "0.2",
+            "mean_anomaly": "0",
+        },
+    },
+    "perturbations": {"zonal": {"J2": "1.0826e-3", "radius": "0.8"}},
+}
+
+
 # ---------------------------------------------------------------------------- sweeps
 INCLINATIONS = ("1", "1e-1", "1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8")
 SWEEP_ORBITS = {"full": 100, "quick": 3}

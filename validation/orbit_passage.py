@@ -39,6 +39,7 @@ from pathlib import Path
 import heyoka as hy
 import mpmath
 import numpy as np
+from orbit_cases import J2_ORBIT
 from report_sections import write_section
 
 import cayley_heyoka as ch
@@ -293,19 +294,8 @@ def step_cost(repeats: int = 7) -> dict[str, float]:
 
     scene = ch.Scene.from_dict(
         {
-            "orbit": {
-                "mu": "1",
-                "elements": {
-                    "a": "1",
-                    "e": "0.1",
-                    "inclination": "0.5",
-                    "node": "0.3",
-                    "argument_of_pericentre": "0.2",
-                    "mean_anomaly": "0",
-                },
-                "formulation": "cayley",
-            },
-            "perturbations": {"zonal": {"J2": "1.0826e-3", "radius": "0.8"}},
+            "orbit": {**J2_ORBIT["orbit"], "formulation": "cayley"},
+            "perturbations": J2_ORBIT["perturbations"],
             "output": {"times": {"start": 0, "stop": 100, "count": 2}},
         }
     )

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import heyoka as hy
 import numpy as np
+from orbit_cases import J2_ORBIT
 
 import cayley_heyoka as ch
 from cayley_heyoka.core.families import FAMILIES
@@ -65,20 +66,7 @@ CASES = {
         1000.0,
     ),
     "Kepler + J2, e = 0.1, i = 0.5": (
-        {
-            "orbit": {
-                "mu": "1",
-                "elements": {
-                    "a": "1",
-                    "e": "0.1",
-                    "inclination": "0.5",
-                    "node": "0.3",
-                    "argument_of_pericentre": "0.2",
-                    "mean_anomaly": "0",
-                },
-            },
-            "perturbations": {"zonal": {"J2": "1.0826e-3", "radius": "0.8"}},
-        },
+        J2_ORBIT,
         3000.0,
     ),
     "heavy top (chaotic: not judged)": (
