@@ -294,14 +294,23 @@ def _solve_kepler(kind: _Kind, M: Any, e: Any) -> Any:
     start = kind.where(e < 0.8, M + e * kind.sin(M), M + 0.85 * e * kind.sign(M))
     E = kind.where(start > kind.pi, hi, kind.where(start < -kind.pi, lo, start))
     done = zero != 0
+    previous = E
     for _ in range(100 + 2 * kind.bits):
         g = E - e * kind.sin(E) - M
         lo = kind.where(g < 0, E, lo)
         hi = kind.where(g > 0, E, hi)
         slope = 1 - e * kind.cos(E)
         correction = g / slope
-        converged = abs(correction) <= 4 * kind.eps * (abs(E) + abs(M)) / slope
         newton = E - correction
+        # Or Newton no longer moves E, or steps back to the E before: with subnormal E and M
+        # (|M| ~ 1e-313) the noise bound 4ε(|E| + |M|) underflows to 0 while g keeps a residue
+        # of one subnormal, and E alternates between two neighbours.
+        converged = (
+            (abs(correction) <= 4 * kind.eps * (abs(E) + abs(M)) / slope)
+            | (newton == E)
+            | (newton == previous)
+        )
+        previous = E
         inside = (newton >= lo) & (newton <= hi)
         # A converged step may leave the bracket by rounding (a root at ±π): keep E then.
         step = kind.where(inside, newton, kind.where(converged, E, (lo + hi) / 2))

@@ -686,3 +686,17 @@ def test_invalid_cayley_state_for_cartesian(change):
     name = next(iter(change))
     with pytest.raises(ValueError, match=name):
         cayley_to_cartesian(CayleyState(**{**GOOD_STATE.__dict__, **change}))
+
+
+@pytest.mark.parametrize("M", [5.9103524366e-314, 5e-324, -3e-320, 2.5e-308])
+@pytest.mark.parametrize("e", [0.0, 0.734375, 0.999999])
+def test_a_subnormal_mean_anomaly_converges_at_pericentre(M, e):
+    """Found by the property above: with E and M subnormal the noise bound of Kepler's
+    equation underflowed to 0 and Newton alternated between two neighbours of the root."""
+    elements = Elements(
+        a=1.0, e=e, inclination=0.3, node=0.0, argument_of_pericentre=0.0, mean_anomaly=M
+    )
+    x, v = elements_to_cartesian(elements, 1.0)
+    assert np.all(np.isfinite(np.asarray(x, dtype=float)))
+    assert abs(float(x[0]) - (1 - e)) <= 4 * DOUBLE_EPS
+    assert abs(float(x[1])) + abs(float(x[2])) <= 4 * DOUBLE_EPS
