@@ -24,9 +24,11 @@ rounded to double on the way in), so a quadruple-precision run sees ``0.1`` exac
 from __future__ import annotations
 
 import collections
+import contextlib
+import contextvars
 import difflib
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -58,16 +60,48 @@ MAX_SCENE_DEPTH = 16
 
 
 # ---------------------------------------------------------------------- helpers for families
+#: Where :func:`recording_keys` gathers the keys each table allows (None: not recording).
+_KEYS: contextvars.ContextVar[list[tuple[str, tuple[str, ...]]] | None] = contextvars.ContextVar(
+    "cayley_heyoka_keys", default=None
+)
+
+
 def check_keys(table: Mapping[str, Any], allowed: Iterable[str], where: str) -> None:
     """Refuse unknown keys, suggesting the nearest valid one."""
+    allowed = list(allowed)
+    if (calls := _KEYS.get()) is not None:
+        calls.append((where, tuple(allowed)))
     if not isinstance(table, Mapping):
         raise SceneError(where, f"must be a table, got {type(table).__name__}")
-    allowed = list(allowed)
     for key in table:
         if key not in allowed:
             near = difflib.get_close_matches(key, allowed, n=1, cutoff=0.5)
             hint = f"; did you mean {near[0]!r}?" if near else f"; valid keys: {', '.join(allowed)}"
             raise SceneError(_join(where, key), f"unknown key{hint}")
+
+
+@contextlib.contextmanager
+def recording_keys() -> Iterator[list[tuple[str, tuple[str, ...]]]]:
+    """The keys each table allows, as the parsers check them: every :func:`check_keys` call
+    made within the context, in order, as ``(where, allowed)`` (the top level is ``""``).
+    Every parser of scene and study files refuses unknown keys through :func:`check_keys`, so
+    this is the schema as the code enforces it (the hostile suite's coverage test lists it).
+
+    Examples
+    --------
+    >>> with recording_keys() as calls:
+    ...     _ = Scene.from_dict({"body": {"inertia": [1, 2, 3]},
+    ...                          "initial": {"rates": [0, 0, 1]},
+    ...                          "output": {"times": [0, 1]}})
+    >>> dict(calls)["body"]
+    ('inertia',)
+    """
+    calls: list[tuple[str, tuple[str, ...]]] = []
+    token = _KEYS.set(calls)
+    try:
+        yield calls
+    finally:
+        _KEYS.reset(token)
 
 
 def number(value: Any, where: str, *, positive: bool = False, nonneg: bool = False) -> Number:
@@ -82,6 +116,15 @@ def number(value: Any, where: str, *, positive: bool = False, nonneg: bool = Fal
         raise SceneError(where, f"must be > 0, got {value}")
     if nonneg and f < 0:
         raise SceneError(where, f"must be >= 0, got {value}")
+    return value
+
+
+def expression_text(value: Any, where: str) -> str:
+    """Validate the text of an expression a scene writes (a force function, an event, a
+    monitor, a Hamiltonian); return it unchanged. Its grammar and names are checked when the
+    model is built (:func:`cayley_heyoka.core.expressions.parse_expression`)."""
+    if not isinstance(value, str) or not value.strip():
+        raise SceneError(where, f"must be a non-empty expression string, got {value!r}")
     return value
 
 
@@ -147,7 +190,7 @@ class IntegratorOptions:
                 "with nothing to gain; raise the precision instead",
             )
         compact = table.get("compact_mode", "auto")
-        if compact not in ("auto", True, False):
+        if compact != "auto" and not isinstance(compact, bool):
             raise SceneError(
                 "integrator.compact_mode", f"must be 'auto', true or false: {compact!r}"
             )
@@ -325,10 +368,11 @@ class UserEvent:
         check_keys(table, ["expression", "direction"], where)
         if "expression" not in table:
             raise SceneError(f"{where}.expression", "is required")
+        text = expression_text(table["expression"], f"{where}.expression")
         direction = table.get("direction", "any")
-        if direction not in _DIRECTIONS:
+        if not isinstance(direction, str) or direction not in _DIRECTIONS:
             raise SceneError(f"{where}.direction", f"must be 'any', 'up' or 'down': {direction!r}")
-        return cls(name, table["expression"], _DIRECTIONS[direction])
+        return cls(name, text, _DIRECTIONS[direction])
 
 
 #: At most this many user monitors per scene (each is one more compiled output).
@@ -361,9 +405,7 @@ def parse_monitors(table: Any) -> dict[str, UserMonitor]:
         check_keys(spec, ["expression", "conserved"], where)
         if "expression" not in spec:
             raise SceneError(f"{where}.expression", "is required")
-        text = spec["expression"]
-        if not isinstance(text, str) or not text.strip():
-            raise SceneError(f"{where}.expression", f"must be non-empty text, got {text!r}")
+        text = expression_text(spec["expression"], f"{where}.expression")
         conserved = spec.get("conserved", True)
         if not isinstance(conserved, bool):
             raise SceneError(f"{where}.conserved", f"must be true or false, got {conserved!r}")
