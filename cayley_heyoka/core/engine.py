@@ -32,7 +32,7 @@ from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Handover, Model, own_terminal
-from .precision import Precision, exact_fraction
+from .precision import Precision, approx, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
 from .result import Result, versions
 from .scene import Scene, check_units
@@ -484,7 +484,7 @@ class Propagation:
             raise SceneError(
                 "output.times",
                 f"the span to t = {last} needs about "
-                f"{float(needed):.3g} steps (the first {steps} reached t = {reached}), more than "
+                f"{approx(needed)} steps (the first {steps} reached t = {reached}), more than "
                 f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
                 "shorten the span, or raise integrator.max_steps if the steps will lengthen",
             )

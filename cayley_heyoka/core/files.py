@@ -165,12 +165,12 @@ def _check_destination(given: Path, kind: str, overwrite: bool) -> None:
 def identify(path: str | Path) -> str | None:
     """Which kind of our files ``path`` is (``"result"``, ... ``"plot"``), or None."""
     path = Path(path)
-    if not path.is_file():  # opening a FIFO would wait for a writer; a device may never end
-        return None
     try:
+        if not path.is_file():  # opening a FIFO would wait for a writer; a device may never end
+            return None
         with open(path, "rb") as f:
             head = f.read(8)
-    except OSError:
+    except OSError:  # unreadable, a name too long: not a file of ours (the reader says why)
         return None
     if head == _PNG_MAGIC:
         return "plot" if _png_software(path).startswith(PNG_SOFTWARE) else None
@@ -329,11 +329,15 @@ def open_ours(path: str | Path, kind: str) -> Iterator[Any]:
     import h5py
 
     path = Path(path)
-    if not path.exists():
+    try:
+        exists, is_dir, is_file = path.exists(), path.is_dir(), path.is_file()
+    except OSError as exc:  # a name too long, a loop of links, no permission on the way
+        raise ResultFileError(path, f"cannot be read ({_reason(exc)})") from None
+    if not exists:
         raise ResultFileError(path, "no such file")
-    if path.is_dir():
+    if is_dir:
         raise ResultFileError(path, "is a directory, not a file")
-    if not path.is_file():
+    if not is_file:
         raise ResultFileError(path, "is not a regular file (a pipe, socket or device)")
     try:
         f = h5py.File(path, "r")

@@ -26,7 +26,7 @@ import mpmath
 from ..core.errors import SceneError
 from ..core.expressions import uses_time
 from ..core.precision import Number, exact_fraction, exceeds_pi
-from ..core.scene import check_keys, number, vector
+from ..core.scene import check_keys, expression_text, number, vector
 from ..core.vectors import cross, dot
 from ..mechanics.kepler import ELEMENT_KEYS, Elements
 from .predominant_mass import system as planets
@@ -183,10 +183,7 @@ class Hamiltonian:
 def _text(table: Mapping[str, Any], key: str) -> str:
     if key not in table:
         raise SceneError(f"hamiltonian.{key}", "is required")
-    text = table[key]
-    if not isinstance(text, str) or not text.strip():
-        raise SceneError(f"hamiltonian.{key}", f"must be an expression string, got {text!r}")
-    return text
+    return expression_text(table[key], f"hamiltonian.{key}")
 
 
 def _initial(tables: Mapping[str, Any], n: int | None) -> tuple[tuple, tuple]:
@@ -214,10 +211,7 @@ def _flow(table: Any, n: int) -> dict[str, str]:
 
 
 def _flow_text(table: Mapping[str, Any], key: str) -> str:
-    text = table[key]
-    if not isinstance(text, str) or not text.strip():
-        raise SceneError(f"hamiltonian.flow.{key}", f"must be an expression string, got {text!r}")
-    return text
+    return expression_text(table[key], f"hamiltonian.flow.{key}")
 
 
 def _length(value: Any, where: str) -> int:

@@ -40,7 +40,7 @@ from ..core.errors import SceneError
 from ..core.expressions import parse_expression, uses_time
 from ..core.model import ParTable
 from ..core.precision import Number, exact_fraction, exceeds_pi
-from ..core.scene import check_keys, number, vector
+from ..core.scene import check_keys, expression_text, number, vector
 from ..mechanics import frames
 
 Expr = hy.expression
@@ -105,7 +105,11 @@ class Zonal:
 
     @classmethod
     def parse(cls, table: Mapping[str, Any], where: str) -> Zonal:
-        keys = [k for k in table if re.fullmatch(r"J[1-9]\d*", k)]
+        keys = (
+            [k for k in table if re.fullmatch(r"J[1-9]\d*", k)]
+            if isinstance(table, Mapping)
+            else []
+        )
         check_keys(table, ["radius", "axis", *keys, "J2", "J3", "J4"], where)
         coeffs = []
         for key in sorted(keys, key=lambda k: int(k[1:])):
@@ -389,7 +393,8 @@ class UserPotential:
         check_keys(table, ["Omega"], where)
         if "Omega" not in table:
             raise SceneError(f"{where}.Omega", "is required: Ω as text over x, y, z, r, t, mu")
-        return cls(table["Omega"], uses_time(table["Omega"]))
+        text = expression_text(table["Omega"], f"{where}.Omega")
+        return cls(text, uses_time(text))
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         symbols = dict(zip("xyz", x, strict=True))

@@ -18,7 +18,7 @@ from ..core.errors import SceneError
 from ..core.expressions import parse_expression, uses_time
 from ..core.model import ParTable
 from ..core.precision import normalised
-from ..core.scene import check_keys, number, unit_vector, vector
+from ..core.scene import check_keys, expression_text, number, unit_vector, vector
 from .attitude import Matrix
 
 Expr = hy.expression
@@ -128,7 +128,8 @@ class Potential:
         check_keys(table, ["V"], where)
         if "V" not in table:
             raise SceneError(f"{where}.V", "is required")
-        return cls(table["V"], uses_time(table["V"]))
+        V = expression_text(table["V"], f"{where}.V")
+        return cls(V, uses_time(V))
 
     def potential(self, ctx: ForceContext) -> Expr:
         symbols = {f"R{i + 1}{j + 1}": ctx.R[i][j] for i in range(3) for j in range(3)}

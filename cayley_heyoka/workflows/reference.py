@@ -178,6 +178,7 @@ def generate_reference(
 
     check_count(stretches)
     out = Path(out)
+    check_destination(out, "result", overwrite=overwrite)  # "." or "/": no name to add to
     workdir = Path(workdir) if workdir is not None else out.with_name(out.name + ".work")
     say = report or (lambda text: None)
     if method not in METHODS:
@@ -204,7 +205,6 @@ def generate_reference(
                 "give (it gives the state, the attitude and the conserved monitors); use "
                 "'integrate'"
             )
-    check_destination(out, "result", overwrite=overwrite)
     _claim_workdir(workdir)
     if evaluated is not None:
         outcome = _closed_form_reference(
