@@ -257,7 +257,8 @@ def _judge(
             problems.append("a refusal without an 'error: ...' line last on stderr")
         if field is not None and field not in last:
             problems.append(f"the refusal does not name {field!r}")
-    if kind == "done" and "nan" in o.stdout.lower().split():
+    # The summary's first line is the scene's title, which may say anything.
+    if kind == "done" and "nan" in " ".join(o.stdout.lower().splitlines()[1:]).split():
         problems.append("nan in a completed run's summary")
     if kind in ("done", "stopped", "interrupted") and out is not None and not out.exists():
         problems.append(f"{out.name} was not written")

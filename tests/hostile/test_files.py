@@ -72,6 +72,7 @@ def _same_as(path: Path, original: Path) -> bool:
 TRUNCATIONS = [0.0, 0.001, 0.01, 0.03, 0.1, 0.25, 0.4, 0.5, 0.6, 0.75, 0.9, 0.99, 0.999]
 
 
+@pytest.mark.covers("verb:info", "option:info result")
 @pytest.mark.parametrize("fraction", TRUNCATIONS)
 @pytest.mark.parametrize("kind", ["result", "quad"])
 def test_truncated_file(hostile, pristine, tmp_path, kind, fraction):
@@ -85,6 +86,7 @@ def test_truncated_file(hostile, pristine, tmp_path, kind, fraction):
 GARBAGE = [0.02, 0.15, 0.3, 0.45, 0.6, 0.75, 0.9, 0.98]
 
 
+@pytest.mark.covers("verb:info", "option:info result")
 @pytest.mark.parametrize("fraction", GARBAGE)
 @pytest.mark.parametrize("kind", ["result", "quad"])
 def test_garbage_block(hostile, pristine, tmp_path, kind, fraction):
@@ -131,6 +133,7 @@ NOT_OURS: dict[str, Callable[[Path], Any]] = {
 }
 
 
+@pytest.mark.covers("verb:info", "option:info result")
 @pytest.mark.parametrize("case", list(NOT_OURS))
 def test_file_that_is_not_ours(hostile, tmp_path, case):
     path = tmp_path / "file.h5"
@@ -156,6 +159,7 @@ OURS = {
 }
 
 
+@pytest.mark.covers("verb:info", "option:info result")
 @pytest.mark.parametrize("kind", list(OURS))
 def test_each_kind_of_our_files_is_summarised(hostile, pristine, kind):
     o = hostile.run(["info", str(pristine[kind])], expect="done")
@@ -199,6 +203,7 @@ DAMAGE: dict[str, Callable[[Any], None]] = {
 }
 
 
+@pytest.mark.covers("verb:info", "option:info result")
 @pytest.mark.parametrize("sealed", [True, False], ids=["resealed", "checksum-stale"])
 @pytest.mark.parametrize("case", list(DAMAGE))
 def test_damaged_contents(hostile, pristine, tmp_path, case, sealed):
@@ -211,6 +216,7 @@ def test_damaged_contents(hostile, pristine, tmp_path, case, sealed):
     hostile.run(["info", str(path)], expect="refused", field=str(path))
 
 
+@pytest.mark.covers("verb:info", "option:info result")
 def test_checksum_removed(hostile, pristine, tmp_path):
     path = _copy(pristine, "sweep", tmp_path)
     with h5py.File(path, "a") as f:
@@ -267,6 +273,13 @@ def _snapshot(d: Path) -> dict[str, bytes | str]:
     return out
 
 
+@pytest.mark.covers(
+    "option:run --out",
+    "option:check --out",
+    "option:sweep --out",
+    "option:reference --out",
+    "option:plot --out",
+)
 @pytest.mark.parametrize("case", list(DESTINATIONS))
 @pytest.mark.parametrize("verb", ["run", "check", "sweep", "reference", "plot"])
 def test_destination_refused_before_any_work(hostile, pristine, scene, tmp_path, verb, case):
@@ -286,6 +299,13 @@ def test_destination_refused_before_any_work(hostile, pristine, scene, tmp_path,
     assert _snapshot(place) == before
 
 
+@pytest.mark.covers(
+    "option:run --out",
+    "option:check --out",
+    "option:sweep --out",
+    "option:reference --out",
+    "option:plot --out",
+)
 @pytest.mark.parametrize(
     "verb, other", [("run", "sweep"), ("check", "result"), ("sweep", "check"), ("plot", "result")]
 )
@@ -302,6 +322,7 @@ def test_another_kind_of_our_files_is_not_replaced(hostile, pristine, scene, tmp
     assert out.read_bytes() == before
 
 
+@pytest.mark.covers("option:run --out", "option:run --overwrite")
 def test_our_result_file_is_replaced_and_a_foreign_one_only_when_told(hostile, scene, tmp_path):
     ours = tmp_path / "r.h5"
     hostile.run(["run", str(scene), "--out", str(ours), "--no-progress"], expect="done", out=ours)
@@ -316,6 +337,7 @@ def test_our_result_file_is_replaced_and_a_foreign_one_only_when_told(hostile, s
     ]
 
 
+@pytest.mark.covers("option:run --out")
 def test_symlink_to_our_file_writes_through(hostile, pristine, scene, tmp_path):
     target = _copy(pristine, "result", tmp_path)
     link = _link(tmp_path / "latest.h5", target)
@@ -323,6 +345,7 @@ def test_symlink_to_our_file_writes_through(hostile, pristine, scene, tmp_path):
     assert link.is_symlink() and len(Result.load(target).t) == 3
 
 
+@pytest.mark.covers("option:run --out")
 def test_a_loop_of_links_is_refused_and_left_alone(hostile, scene, tmp_path):
     a, b = tmp_path / "a.h5", tmp_path / "b.h5"
     a.symlink_to(b)
@@ -333,6 +356,7 @@ def test_a_loop_of_links_is_refused_and_left_alone(hostile, scene, tmp_path):
     assert a.is_symlink() and b.is_symlink()
 
 
+@pytest.mark.covers("option:run --out")
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only directories")
 def test_read_only_directory(hostile, scene, tmp_path):
     locked = tmp_path / "locked"
@@ -346,6 +370,7 @@ def test_read_only_directory(hostile, scene, tmp_path):
         locked.chmod(0o755)
 
 
+@pytest.mark.covers("verb:reference", "option:reference --out")
 def test_reference_leaves_a_work_directory_it_did_not_make(hostile, scene, tmp_path):
     work = tmp_path / "ref.h5.work"
     work.mkdir()

@@ -33,6 +33,14 @@ def _argv(verb: str, path: Path, tmp_path: Path) -> list[str]:
     }[verb]
 
 
+@pytest.mark.covers(
+    "option:run scene",
+    "option:check scene",
+    "option:reference scene",
+    "option:sweep study",
+    "option:info result",
+    "option:plot file",
+)
 @pytest.mark.parametrize("verb", VERBS)
 @pytest.mark.parametrize("special", ["fifo", "/dev/null", "/dev/zero"])
 def test_path_that_is_not_a_regular_file(hostile, tmp_path, verb, special):
@@ -72,11 +80,13 @@ STUDIES = [
 ]  # fmt: skip
 
 
+@pytest.mark.covers("verb:sweep", "study-key:sweep.count", "study-key:sweep.parameters")
 @pytest.mark.parametrize(("sweep", "words"), STUDIES)
 def test_study_with_too_many_members_is_refused_before_listing_them(hostile, sweep, words):
     hostile.run(["sweep", str(_study(hostile, sweep))], expect="refused", field=words, seconds=10)
 
 
+@pytest.mark.covers("option:reference --checkpoints", "option:reference --tolerance")
 @pytest.mark.parametrize(
     ("options", "words"),
     [
@@ -94,6 +104,7 @@ def test_reference_option_out_of_bounds(hostile, tmp_path, options, words):
     assert not out.exists() and not (tmp_path / "r.h5.work").exists()
 
 
+@pytest.mark.covers("option:check --set")
 @pytest.mark.parametrize(
     ("setting", "words"),
     [
@@ -124,6 +135,7 @@ OVERFLOWING_LATER = [
 ]
 
 
+@pytest.mark.covers("verb:run", "key:forces.potential.V")
 @pytest.mark.parametrize(("V", "precision", "t_bad"), OVERFLOWING_LATER)
 def test_output_that_overflows_after_the_start_stops_with_its_rows(
     hostile, tmp_path, V, precision, t_bad
@@ -155,6 +167,7 @@ def _with_event(name: str, expression: str) -> dict:
     return data
 
 
+@pytest.mark.covers("key:events.*.expression")
 @pytest.mark.parametrize("name", ["free_body", "orbit_j2_third_body", "projectile"])
 @pytest.mark.parametrize("expression", ["0", "1/0", "pi", "2.5*3"])
 def test_constant_user_event_is_refused(hostile, name, expression):
@@ -163,11 +176,13 @@ def test_constant_user_event_is_refused(hostile, name, expression):
     hostile.run(["run", str(scene)], expect="refused", field="events.e.expression: is constant")
 
 
+@pytest.mark.covers("key:events.*.expression")
 @pytest.mark.parametrize("expression", ["t - 0.5", "qw"])
 def test_user_event_on_time_or_state_runs(hostile, expression):
     hostile.run(["run", str(hostile.scene(_with_event("free_body", expression)))], expect="done")
 
 
+@pytest.mark.covers("key:output.events", "key:output.monitors")
 @pytest.mark.parametrize(
     ("key", "names"),
     [("events", ["invariable_plane", "invariable_plane"]), ("monitors", ["energy", "energy"])],
@@ -178,6 +193,7 @@ def test_name_given_twice_is_refused(hostile, key, names):
     hostile.run(["run", str(hostile.scene(data))], expect="refused", field=f"output.{key}")
 
 
+@pytest.mark.covers("key:integrator.max_steps")
 def test_step_budget_beyond_64_bits_is_refused(hostile):
     data = small("free_body")
     data["integrator"]["max_steps"] = 10**30
@@ -224,6 +240,7 @@ def projectile_result(hostile, tmp_path) -> Path:
     return out
 
 
+@pytest.mark.covers("verb:plot", "option:plot --kind")
 @pytest.mark.parametrize(
     ("kind", "name", "words"),
     [
@@ -241,6 +258,7 @@ def test_plot_that_cannot_be_drawn_is_refused(
     assert not out.exists()
 
 
+@pytest.mark.covers("verb:sweep", "option:sweep --out")
 @pytest.mark.parametrize("formulation", ["quaternion", "rodrigues"])
 def test_sweep_member_whose_output_overflows_later_fails(hostile, tmp_path, formulation):
     """Both sweep paths (heyoka's ensemble for the quaternion form, one run per member for

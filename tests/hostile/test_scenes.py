@@ -200,6 +200,9 @@ TIMES = [
 ]
 
 
+@pytest.mark.covers(
+    "key:output.times", "key:output.times.start", "key:output.times.stop", "key:output.times.count"
+)
 @pytest.mark.parametrize(("times", "field"), [pytest.param(t, f, id=i) for i, t, f in TIMES])
 def test_output_times(hostile, times, field):
     data = small("free_body")
@@ -228,6 +231,12 @@ INTEGRATOR = [
 ]
 
 
+@pytest.mark.covers(
+    "key:integrator.precision",
+    "key:integrator.tolerance",
+    "key:integrator.compact_mode",
+    "key:integrator.max_step",
+)
 @pytest.mark.parametrize(("options", "field"), [pytest.param(o, f, id=i) for i, o, f in INTEGRATOR])
 def test_integrator_options(hostile, options, field):
     data = small("free_body")
@@ -241,6 +250,7 @@ def test_tolerance_at_epsilon_runs(hostile):
     hostile.run(["run", str(hostile.scene(data)), "--no-progress"], expect="done")
 
 
+@pytest.mark.covers("key:output.times.stop")
 @pytest.mark.parametrize("stop", ["1e300", "1e6"])
 def test_a_span_far_beyond_the_step_budget_is_refused(hostile, stop):
     data = small("free_body")
@@ -252,6 +262,7 @@ def test_a_span_far_beyond_the_step_budget_is_refused(hostile, stop):
     assert "more than 10 times the step budget" in o.error_line
 
 
+@pytest.mark.covers("key:integrator.max_steps", "option:run --out")
 def test_step_budget_stops_a_run_and_keeps_its_results(hostile, tmp_path):
     data = small("free_body")
     data["output"]["times"] = {"start": 0, "stop": Raw("1500"), "count": 11}
@@ -412,6 +423,7 @@ EXPRESSIONS = [
 ]
 
 
+@pytest.mark.covers("key:forces.potential.V")
 @pytest.mark.parametrize(("V", "words"), [pytest.param(v, w, id=i) for i, v, w in EXPRESSIONS])
 def test_expressions(hostile, V, words):
     scene = hostile.scene(_potential(V))
@@ -424,6 +436,7 @@ def test_large_expression_under_the_limits_runs(hostile):
     hostile.run(["run", str(hostile.scene(_potential(V))), "--no-progress"], expect="done")
 
 
+@pytest.mark.covers("key:events.*.expression")
 def test_expression_over_the_limit_in_a_user_event(hostile):
     data = small("free_body")
     data["events"] = {"deep": {"expression": "+".join(["p"] * 2500)}}
@@ -446,6 +459,7 @@ FILES = [
 ]
 
 
+@pytest.mark.covers("option:run scene", "option:check scene", "option:reference scene")
 @pytest.mark.parametrize("content", [pytest.param(c, id=i) for i, c in FILES])
 @pytest.mark.parametrize("verb", ["run", "check", "reference"])
 def test_scene_file_that_is_not_a_scene(hostile, tmp_path, content, verb):
@@ -459,6 +473,9 @@ def _argv(verb: str, path: Path, tmp_path: Path) -> list[str]:
     return [verb, str(path)]
 
 
+@pytest.mark.covers(
+    "option:run scene", "option:check scene", "option:reference scene", "option:sweep study"
+)
 @pytest.mark.parametrize("verb", ["run", "check", "reference", "sweep"])
 @pytest.mark.parametrize("where", ["missing", "directory"])
 def test_scene_path_missing_or_a_directory(hostile, tmp_path, verb, where):
@@ -469,6 +486,7 @@ def test_scene_path_missing_or_a_directory(hostile, tmp_path, verb, where):
     assert words in o.error_line
 
 
+@pytest.mark.covers("option:sweep study", "study-key:scene")
 @pytest.mark.parametrize("content", ["binary", "missing-scene", "deep"])
 def test_study_that_cannot_be_read(hostile, tmp_path, content):
     study = tmp_path / "study.toml"
@@ -499,6 +517,7 @@ LONG = {
 }
 
 
+@pytest.mark.covers("verb:run", "option:run --progress", "signal:run")
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_signal_during_a_run_keeps_its_results(hostile, tmp_path, sig):
     """A run of ~30 s signalled once its progress bar shows 1 %: exit 130 within seconds,
@@ -532,6 +551,7 @@ def _infinite_energy() -> dict:
     }
 
 
+@pytest.mark.covers("verb:run", "verb:check", "verb:reference")
 @pytest.mark.parametrize("verb", ["run", "check", "reference"])
 @pytest.mark.parametrize(
     ("build", "field"),
