@@ -283,6 +283,14 @@ def hostile(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> Runner:
     return Runner(tmp_path, capfd)
 
 
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """A pytest-xdist worker hands its tally to the controller, which prints the sum
+    (tests/conftest.py)."""
+    output = getattr(session.config, "workeroutput", None)
+    if output is not None:
+        output["hostile_tally"] = dict(TALLY)
+
+
 def pytest_terminal_summary(terminalreporter: Any) -> None:
     if TALLY:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(TALLY.items()))
