@@ -41,6 +41,7 @@ from .recording import (
     evaluate_outputs,
     event_logs,
     first_nonfinite,
+    magnitude,
     start_values,
 )
 from .result import Result, versions
@@ -497,7 +498,7 @@ class Propagation:
             raise SceneError(
                 "output.times",
                 f"the span to t = {last} needs about "
-                f"{float(needed):.3g} steps (the first {steps} reached t = {reached}), more than "
+                f"{magnitude(needed)} steps (the first {steps} reached t = {reached}), more than "
                 f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
                 "shorten the span, or raise integrator.max_steps if the steps will lengthen",
             )

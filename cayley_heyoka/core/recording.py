@@ -46,7 +46,7 @@ def check_fits(scene: Scene, model: Model) -> None:
         if steps > options.max_steps:
             raise SceneError(
                 "integrator.max_step",
-                f"{options.max_step} needs at least {float(Fraction(steps)):.3g} steps from "
+                f"{options.max_step} needs at least {magnitude(steps)} steps from "
                 f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
                 f"{options.max_steps}",
             )
@@ -105,6 +105,15 @@ def _finite_array(
             fields[i], f"{what[i]} is {out[i]} at the start: it must be finite to integrate"
         )
     return out
+
+
+def magnitude(value: Fraction) -> str:
+    """``value`` to 3 significant digits (``%.3g``), at any magnitude."""
+    try:
+        return f"{float(value):.3g}"
+    except OverflowError:  # beyond double's range (a span of 1e4000 in quad)
+        with mpmath.workdps(20):
+            return mpmath.nstr(mpmath.mpf(value.numerator) / value.denominator, 3)
 
 
 def _short(value: Any) -> str:

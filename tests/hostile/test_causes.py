@@ -246,3 +246,14 @@ def test_a_hamiltonian_whose_slope_is_infinite_at_the_start_is_refused(hostile):
 @pytest.mark.covers("class:11", "key:forces.potential.V", "verb:check")
 def test_check_names_the_force_function_too(hostile):
     _refused(hostile, _potential("1/(R33 - R33)"), "forces.potential.V", verb="check")
+
+
+# ---------------------------------------------------------------------- counts beyond double
+@pytest.mark.covers("key:integrator.max_step", "key:integrator.precision")
+def test_a_step_count_beyond_double_is_told_not_a_traceback(hostile):
+    """max_step 1e-300 over 1e300 in quad: 1e600 steps, beyond the double the message used."""
+    data = _free_body(
+        integrator={"precision": "quad", "max_step": Raw("1e-300")},
+        output={"times": {"start": Raw("0.0"), "stop": Raw("1e300"), "count": 3}},
+    )
+    _refused(hostile, data, "integrator.max_step", "1.0e+600 steps")
