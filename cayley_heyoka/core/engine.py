@@ -8,7 +8,9 @@ instead of an LLVM compilation; the model of a scene run again is kept too.
 Before anything is compiled a run is refused (:class:`SceneError`) if it cannot fit or cannot
 mean anything: recorded rows beyond :data:`MAX_RECORD_BYTES`, a ``max_step`` that needs more
 steps than the step budget, a non-finite initial state or parameter, and — once compiled — an
-output or monitor that is not finite at the first output time. A run spends at most
+output, monitor or expression of the scene's text that is not finite at the first output
+time, or a first step that is not; the refusal names the scene field of the cause
+(:mod:`.causes`). A run spends at most
 ``integrator.max_steps`` steps, then stops with its results. In the main thread, Ctrl-C (or a
 SIGTERM the caller turns into one) is noted and acted on after the current step: the run ends
 there with everything recorded so far (:class:`Interrupted`), the same bits as an
@@ -28,12 +30,20 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
+from .causes import check_sources, explain_start, start_failure
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Handover, Model, own_terminal
-from .precision import Precision, approx, exact_fraction
-from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
+from .precision import Precision, exact_fraction
+from .recording import (
+    check_fits,
+    evaluate_outputs,
+    event_logs,
+    first_nonfinite,
+    magnitude,
+    start_values,
+)
 from .result import Result, versions
 from .scene import Scene, check_units
 from .signals import WORKER, DeferredSignals
@@ -153,15 +163,12 @@ class Propagation:
         with np.errstate(all="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             self.model = model = model_of(scene)
-            initial = prec.array(model.initial_state)
             # The whole parameter vector (outputs may use parameters the equations do not);
             # the integrator holds its leading part, copied back whenever a handler changes it.
-            self._pars = prec.array(model.pars.values)
+            initial, self._pars = start_values(model, prec)
         check_fits(scene, model)
         check_units(scene, [*model.outputs, *model.monitors])
         self.grid = scene.output.time_grid(prec)
-        require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
-        require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")
         self.compiled, self._cached = compile_model(model, scene.integrator)
         self._compile_seconds = 0.0 if self._cached else self.compiled.compile_seconds
         self._first = model
@@ -170,11 +177,9 @@ class Propagation:
         first = evaluate_outputs(
             self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
         )
-        for name, value in first.items():
-            if name in model.unbounded:
-                continue
-            kind = "monitors" if name in model.monitors else "outputs"
-            require_finite(np.ravel(value), [f"{kind}.{name}"] * np.size(value), kind[:-1])
+        if not all(np.all(np.isfinite(v)) for k, v in first.items() if k not in model.unbounded):
+            raise start_failure(model, prec, initial, self._pars, self.grid[0], first)
+        check_sources(model, prec, initial, self._pars, self.grid[0])
         self._initial = initial
         self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)
@@ -373,10 +378,19 @@ class Propagation:
                 self.message = (
                     f"the state became non-finite after t = {when}; results kept up to there"
                 )
+                if self.done == 0 and (cause := self._cause_at_start()) is not None:
+                    raise cause  # the first step cannot be taken: nothing was integrated
             elif outcome == hy.taylor_outcome.cb_stop:
                 self.message = f"stopped by the progress callback at t = {ta.time}"
             else:
                 self.message = f"stopped at t = {ta.time} with outcome {outcome}"
+
+    def _cause_at_start(self) -> SceneError | None:
+        """Why the first step could not be finite: the first of the model's expressions and
+        right-hand sides not finite at the start (:func:`explain_start`), if any."""
+        prec, model = self.precision, self._first
+        pars = prec.array(model.pars.values)
+        return explain_start(model, prec, self._initial, pars, self.grid[0])
 
     def _fresh_integrator(self) -> Any:
         ta = self.compiled.take()
@@ -484,7 +498,7 @@ class Propagation:
             raise SceneError(
                 "output.times",
                 f"the span to t = {last} needs about "
-                f"{approx(needed)} steps (the first {steps} reached t = {reached}), more than "
+                f"{magnitude(needed)} steps (the first {steps} reached t = {reached}), more than "
                 f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
                 "shorten the span, or raise integrator.max_steps if the steps will lengthen",
             )

@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import ast
 import io
+import re
 import tokenize
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
 import heyoka as hy
 
@@ -42,6 +44,7 @@ FUNCTIONS = {
 }
 
 _KEYWORD_NAMES = {"lambda": "lambda_"}
+_KEYWORD_NAMES_BACK = {v: k for k, v in _KEYWORD_NAMES.items()}
 _EXACT_INT_LIMIT = 2**53
 
 #: Limits of an expression text (docs/scenes.md, "Limits"), checked on its tokens before
@@ -59,6 +62,9 @@ def parse_expression(
 ) -> hy.expression:
     """Parse ``text`` into a heyoka expression over ``symbols`` (plus ``t`` and ``pi``).
 
+    The expression is recorded in ``pars`` as the scene's ``field`` (:meth:`ParTable.source`),
+    so that a run that cannot start can name it and say why (:func:`trace`).
+
     Parameters
     ----------
     text
@@ -71,6 +77,58 @@ def parse_expression(
     field
         The scene field, for error messages.
     """
+    counter = [0]
+
+    def literal(digits: str) -> hy.expression:
+        counter[0] += 1
+        return pars.add(f"{field}#{counter[0]}", digits)
+
+    expr = _build(text, symbols, pars, field, literal, None)
+    pars.source(field, expr, text, symbols)
+    return expr
+
+
+@dataclass(frozen=True)
+class Node:
+    """One operation, name or number of a parsed text (:func:`trace`)."""
+
+    #: The node's own text, as Python writes it back (``1 / (R33 - R33)``).
+    text: str
+    #: ``"+"``, ``"-"``, ``"*"``, ``"/"``, ``"**"``, ``"neg"``, a function's name, ``"name"``
+    #: or ``"number"``.
+    kind: str
+    expression: hy.expression
+    #: Positions of the operands in the trace (before this node).
+    operands: tuple[int, ...]
+    #: The names the node's text uses.
+    names: frozenset[str]
+
+
+def trace(
+    text: str, symbols: Mapping[str, hy.expression], pars: ParTable, field: str
+) -> list[Node]:
+    """Every node of the expression that :func:`parse_expression` built from ``text`` into
+    ``pars``, operands before the operations on them: its literals are the parameters it
+    allocated there."""
+    counter = [0]
+
+    def literal(digits: str) -> hy.expression:
+        counter[0] += 1
+        return hy.par[pars.index(f"{field}#{counter[0]}")]
+
+    nodes: list[Node] = []
+    _build(text, symbols, pars, field, literal, nodes)
+    return nodes
+
+
+def _build(
+    text: str,
+    symbols: Mapping[str, hy.expression],
+    pars: ParTable,
+    field: str,
+    literal: Callable[[str], hy.expression],
+    nodes: list[Node] | None,
+) -> hy.expression:
     if not isinstance(text, str) or not text.strip():
         raise SceneError(field, f"must be a non-empty expression string, got {text!r}")
     source = _rename_keywords(text, field)
@@ -78,51 +136,70 @@ def parse_expression(
     table = {_KEYWORD_NAMES.get(k, k): v for k, v in symbols.items()}
     table.setdefault("t", hy.time)
     table.setdefault("pi", hy.pi)
-    counter = [0]
+    # Nodes (when traced) as positions in ``nodes``, beside their values.
+    Built = tuple[hy.expression, int]
 
-    def build(node: ast.AST) -> hy.expression:
-        if isinstance(node, ast.Expression):
-            return build(node.body)
-        if isinstance(node, ast.BinOp):
+    def node(ast_node: ast.AST, kind: str, value: hy.expression, *operands: Built) -> Built:
+        if nodes is None:
+            return value, -1
+        segment = ast.unparse(ast_node)
+        inside = list(ast.walk(ast_node))
+        functions = {c.func for c in inside if isinstance(c, ast.Call)}
+        names = frozenset(
+            _KEYWORD_NAMES_BACK.get(n.id, n.id)
+            for n in inside
+            if isinstance(n, ast.Name) and n not in functions
+        )
+        for k, v in _KEYWORD_NAMES.items():
+            segment = re.sub(rf"\b{v}\b", k, segment)
+        nodes.append(Node(segment, kind, value, tuple(o[1] for o in operands), names))
+        return value, len(nodes) - 1
+
+    def build(n: ast.AST) -> Built:
+        if isinstance(n, ast.Expression):
+            return build(n.body)
+        if isinstance(n, ast.BinOp):
             # A left-leaning chain (a + b - c + ...) is folded in a loop, left to right as
             # Python would, so that a sum of many terms costs no recursion.
-            chain = [node]
+            chain = [n]
             while isinstance(chain[-1].left, ast.BinOp) and type(chain[-1].op) in _CHAINED:
                 chain.append(chain[-1].left)
             value = build(chain[-1].left)
             for link in reversed(chain):
-                value = _apply(link.op, value, build(link.right), field)
+                right = build(link.right)
+                result = _apply(link.op, value[0], right[0], field)
+                value = node(link, _SYMBOLS[type(link.op)], result, value, right)
             return value
-        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-            v = build(node.operand)
-            return -v if isinstance(node.op, ast.USub) else v
-        if isinstance(node, ast.Name):
-            if node.id not in table:
+        if isinstance(n, ast.UnaryOp) and isinstance(n.op, ast.USub | ast.UAdd):
+            v = build(n.operand)
+            return node(n, "neg", -v[0], v) if isinstance(n.op, ast.USub) else v
+        if isinstance(n, ast.Name):
+            if n.id not in table:
                 known = ", ".join(sorted(k.replace("lambda_", "lambda") for k in table))
-                raise SceneError(field, f"unknown name {node.id!r}; known names: {known}")
-            return table[node.id]
-        if isinstance(node, ast.Constant) and isinstance(node.value, int | float):
-            if isinstance(node.value, bool):
+                raise SceneError(field, f"unknown name {n.id!r}; known names: {known}")
+            return node(n, "name", table[n.id])
+        if isinstance(n, ast.Constant) and isinstance(n.value, int | float):
+            if isinstance(n.value, bool):
                 raise SceneError(field, "booleans are not numbers here")
-            if isinstance(node.value, int) and abs(node.value) < _EXACT_INT_LIMIT:
+            if isinstance(n.value, int) and abs(n.value) < _EXACT_INT_LIMIT:
                 # In the run's type: heyoka folds 3/5 in the type of its operands.
-                return pars.constant(node.value)
-            literal = ast.get_source_segment(source.strip(), node) or repr(node.value)
+                return node(n, "number", pars.constant(n.value))
+            text_of = ast.get_source_segment(source.strip(), n) or repr(n.value)
             try:
-                exact_fraction(literal)
+                exact_fraction(text_of)
             except ValueError as exc:
                 raise SceneError(field, f"literal {exc}") from None
-            counter[0] += 1
-            return pars.add(f"{field}#{counter[0]}", literal)
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
-            fn = FUNCTIONS.get(node.func.id)
-            if fn is None or node.keywords:
+            return node(n, "number", literal(text_of))
+        if isinstance(n, ast.Call) and isinstance(n.func, ast.Name):
+            fn = FUNCTIONS.get(n.func.id)
+            if fn is None or n.keywords:
                 known = ", ".join(sorted(FUNCTIONS))
-                raise SceneError(field, f"unknown function {node.func.id!r}; known: {known}")
-            return fn(*[build(a) for a in node.args])
-        raise SceneError(field, f"unsupported syntax {ast.dump(node)[:60]!r} in {text!r}")
+                raise SceneError(field, f"unknown function {n.func.id!r}; known: {known}")
+            args = [build(a) for a in n.args]
+            return node(n, n.func.id, fn(*[a[0] for a in args]), *args)
+        raise SceneError(field, f"unsupported syntax {ast.dump(n)[:60]!r} in {text!r}")
 
-    return build(tree)
+    return build(tree)[0]
 
 
 def names_used(text: str, field: str = "expression") -> set[str]:
@@ -144,6 +221,7 @@ def uses_time(text: object) -> bool:
 
 
 _CHAINED = (ast.Add, ast.Sub, ast.Mult, ast.Div)
+_SYMBOLS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
 _OPERATORS = {
     ast.Add: lambda a, b: a + b,
     ast.Sub: lambda a, b: a - b,

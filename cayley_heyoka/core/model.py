@@ -15,7 +15,7 @@ from __future__ import annotations
 import copy
 import functools
 import pickle
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, TypeAlias
@@ -34,6 +34,12 @@ class ParTable:
     the run's floating type (:meth:`Precision.constant`), so that nothing a family writes in
     its equations (½, 15/8, a literal of a force function) is a double in a quad system.
 
+    It also keeps where the model's numbers and terms come from in the scene, so that a run
+    that cannot start names its cause (:mod:`.causes`): the scene field of each parameter
+    (``field``), the expressions parsed from the scene's text and the terms built from its
+    tables (:meth:`source`), and the values of placeholder variables such terms were written
+    on (:meth:`bind`).
+
     Parameters
     ----------
     precision
@@ -44,25 +50,62 @@ class ParTable:
         self.precision = precision if precision is not None else Precision()
         self.names: list[str] = []
         self.values: list[Any] = []
+        self.fields: list[str | None] = []
+        self.sources: list[Source] = []
+        self.placeholders: dict[str, Expr] = {}
 
     def constant(self, value: int | Fraction | str) -> Expr:
         """A number node exactly ``value``, or ``value`` correctly rounded in the precision."""
         return self.precision.constant(value)
 
-    def add(self, name: str, value: Number) -> Expr:
-        """Allocate a parameter named ``name`` holding ``value``; returns ``par[i]``."""
+    def add(self, name: str, value: Number, field: str | None = None) -> Expr:
+        """Allocate a parameter named ``name`` holding ``value``; returns ``par[i]``.
+
+        ``field`` is the scene field (or fields, ``", "``-separated) the value comes from;
+        by default a name of the form ``FIELD#k`` (a literal of an expression text) comes
+        from ``FIELD``, and another from no field the scene spells.
+        """
         if name in self.names:
             raise ValueError(f"parameter {name!r} allocated twice")
         self.names.append(name)
         self.values.append(value)
+        self.fields.append(field if field is not None or "#" not in name else name.split("#")[0])
         return hy.par[len(self.names) - 1]
 
     def index(self, name: str) -> int:
         """Position of a parameter in the heyoka ``pars`` array."""
         return self.names.index(name)
 
+    def source(
+        self,
+        field: str,
+        expression: Expr,
+        text: str | None = None,
+        symbols: Mapping[str, Expr] | None = None,
+    ) -> None:
+        """Record that ``expression`` is the scene's ``field``: parsed from ``text`` over
+        ``symbols`` (:func:`.expressions.parse_expression` records every text it parses), or
+        a term the family built from that table. The first record of a field is kept."""
+        if all(s.field != field for s in self.sources):
+            self.sources.append(Source(field, expression, text, symbols))
+
+    def bind(self, values: Mapping[str, Expr]) -> None:
+        """The values of placeholder variables that recorded sources were written on, as
+        expressions of the state (``R11__`` of a force function on the attitude matrix)."""
+        self.placeholders.update(values)
+
     def __len__(self) -> int:
         return len(self.names)
+
+
+@dataclass(frozen=True)
+class Source:
+    """A scene expression or term as a model holds it (:meth:`ParTable.source`)."""
+
+    field: str
+    expression: Expr
+    text: str | None = None
+    symbols: Mapping[str, Expr] | None = None
 
 
 @dataclass
@@ -171,6 +214,10 @@ class Model:
     variants
         ``name -> Model``: the scene's other variants, built (and kept) on first use; a
         terminal handler moves a run to one by returning :class:`Handover`. None: no others.
+    initial_fields
+        The scene field each state variable's initial value comes from (``p`` from
+        ``initial.rates[0]``), for the refusals of a run that cannot start; a variable not
+        listed is named ``initial.NAME``.
     """
 
     family: str
@@ -186,6 +233,11 @@ class Model:
     unbounded: tuple[str, ...] = ()
     variant: str = ""
     variants: Callable[[str], Model] | None = None
+    initial_fields: dict[str, str] = field(default_factory=dict)
+
+    def initial_field(self, name: str) -> str:
+        """The scene field the initial value of state variable ``name`` comes from."""
+        return self.initial_fields.get(name, f"initial.{name}")
 
     @property
     def state_names(self) -> list[str]:

@@ -442,24 +442,3 @@ def fraction_text(value: Fraction, precision: Precision) -> str:
     with mpmath.workdps(precision.dps + 15):
         return mpmath.nstr(mpmath.mpf(value.numerator) / value.denominator, precision.dps + 10)
 
-
-def approx(value: Fraction | int, digits: int = 3) -> str:
-    """``value`` to ``digits`` significant digits, for messages: exact arithmetic, so a step
-    count of 1e400 reads as ``1e+400`` where ``float()`` would overflow.
-
-    Examples
-    --------
-    >>> approx(Fraction(10**400, 3))
-    '3.33e+399'
-    """
-    import decimal
-
-    with decimal.localcontext() as ctx:
-        ctx.prec = digits
-        ctx.Emax, ctx.Emin = decimal.MAX_EMAX, decimal.MIN_EMIN
-        value = Fraction(value)
-        if not value:
-            return "0"
-        quotient = decimal.Decimal(value.numerator) / decimal.Decimal(value.denominator)
-        mantissa, exponent = f"{quotient:.{digits - 1}e}".split("e")
-        return f"{mantissa}e{int(exponent):+d}"

@@ -5,14 +5,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from fractions import Fraction
 from typing import Any
 
+import mpmath
 import numpy as np
 
 from .compiler import Compiled, flat_outputs
 from .errors import SceneError
 from .model import Model
-from .precision import Precision, approx, exact_fraction
+from .precision import Precision, exact_fraction
 from .result import EventLog
 from .scene import Scene
 
@@ -44,19 +46,80 @@ def check_fits(scene: Scene, model: Model) -> None:
         if steps > options.max_steps:
             raise SceneError(
                 "integrator.max_step",
-                f"{options.max_step} needs at least {approx(steps)} steps from "
+                f"{options.max_step} needs at least {magnitude(steps)} steps from "
                 f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
                 f"{options.max_steps}",
             )
 
 
-def require_finite(values: np.ndarray, names: list[str], what: str) -> None:
-    bad = np.flatnonzero(~np.isfinite(values))
+def start_values(model: Model, precision: Precision) -> tuple[np.ndarray, np.ndarray]:
+    """The initial state and the whole parameter vector of ``model`` in ``precision``, each
+    finite, or the refusal naming the scene field a number comes from.
+
+    The scene's own numbers were checked in the run's precision when it was loaded; one that
+    is not finite here (or that the precision cannot hold) is derived from them (μ Jₙ Rⁿ, a
+    state converted from elements) and overflows it.
+    """
+    names = model.state_names
+    state = _finite_array(
+        precision,
+        model.initial_state,
+        [model.initial_field(n) for n in names],
+        [f"the initial value of {n}" for n in names],
+    )
+    pars = model.pars
+    values = _finite_array(
+        precision,
+        pars.values,
+        [f or f"parameters.{n}" for f, n in zip(pars.fields, pars.names, strict=True)],
+        [
+            f"the number {n}" if f is not None else "the parameter"
+            for f, n in zip(pars.fields, pars.names, strict=True)
+        ],
+    )
+    return state, values
+
+
+def _finite_array(
+    precision: Precision, values: Sequence[Any], fields: list[str], what: list[str]
+) -> np.ndarray:
+    try:
+        out = precision.array(values)
+    except SceneError:
+        for i, value in enumerate(values):
+            try:
+                precision.number(value)
+            except SceneError:
+                source = "them" if ", " in fields[i] else "it"
+                raise SceneError(
+                    fields[i],
+                    f"{what[i]} derived from {source} is {_short(value)}, which "
+                    f"{precision.name} cannot hold; scale the units (or choose a wider "
+                    "precision)",
+                ) from None
+        raise
+    bad = np.flatnonzero(~np.isfinite(out))
     if len(bad):
         i = int(bad[0])
         raise SceneError(
-            names[i], f"the {what} is {values[i]} at the start: it must be finite to integrate"
+            fields[i], f"{what[i]} is {out[i]} at the start: it must be finite to integrate"
         )
+    return out
+
+
+def magnitude(value: Fraction) -> str:
+    """``value`` to 3 significant digits (``%.3g``), at any magnitude."""
+    try:
+        return f"{float(value):.3g}"
+    except OverflowError:  # beyond double's range (a span of 1e4000 in quad)
+        with mpmath.workdps(20):
+            return mpmath.nstr(mpmath.mpf(value.numerator) / value.denominator, 3)
+
+
+def _short(value: Any) -> str:
+    """A number (or its decimal text) to 6 significant digits."""
+    with mpmath.workdps(20):
+        return mpmath.nstr(mpmath.mpf(str(value)), 6)
 
 
 def first_nonfinite(

@@ -62,6 +62,12 @@ def build_model(scene: Scene) -> Model:
     conserved = () if ham.time_dependent else ("energy",)
     monitors, conserved = select_monitors(scene, monitors, conserved)
     events = user_events(scene, outputs, pars)
+    # (χ, λ) start at (η, ϖ): the flow of H₁ is the identity at t = 0.
+    coordinates = ("eta", "chi") if ham.formulation == "canonical" else ("chi",)
+    momenta = ("varpi", "lambda") if ham.formulation == "canonical" else ("lambda",)
+    fields = {f"{c}{i + 1}": f"initial.eta[{i}]" for c in coordinates for i in range(n)}
+    fields |= {f"{c}{i + 1}": f"initial.varpi[{i}]" for c in momenta for i in range(n)}
+    fields["S"] = "output.principal_function"
     return Model(
         "hamiltonian",
         system,
@@ -71,6 +77,7 @@ def build_model(scene: Scene) -> Model:
         monitors,
         conserved,
         events,
+        initial_fields=fields,
     )
 
 
@@ -93,11 +100,13 @@ def _projectile(eta, varpi, ham: Hamiltonian, pars: ParTable, prec) -> tuple[Any
     The squares are taken exactly from the scene's numbers and rounded once, so that no
     expression of parameters alone is left for heyoka to evaluate at every Taylor order.
     """
-    g = pars.add("projectile.g", ham.constants["g"])
+    g = pars.add("projectile.g", ham.constants["g"], "hamiltonian.g")
 
     def half_square(key: str) -> Any:
         value = Fraction(exact_fraction(ham.constants[key])) ** 2 / 2
-        return pars.add(f"projectile.{key}_squared_half", fraction_text(value, prec))
+        return pars.add(
+            f"projectile.{key}_squared_half", fraction_text(value, prec), f"hamiltonian.{key}"
+        )
 
     mu2, nu2 = half_square("mu"), half_square("nu")
     H1 = 0.5 * hy.sum([p * p for p in varpi]) + g * eta[2]

@@ -406,6 +406,11 @@ class UserPotential:
 PERTURBATIONS = {"zonal": Zonal, "third_body": ThirdBody, "potential": UserPotential}
 
 
+def perturbation_key(term: Any) -> str:
+    """The ``[perturbations.KEY]`` table of a parsed term."""
+    return next(key for key, cls in PERTURBATIONS.items() if isinstance(term, cls))
+
+
 def parse_perturbations(table: Mapping[str, Any]) -> tuple:
     """The ``[perturbations.*]`` tables, in a fixed order so equal scenes compile equally."""
     check_keys(table, list(PERTURBATIONS), "perturbations")

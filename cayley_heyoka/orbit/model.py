@@ -32,7 +32,14 @@ from ..core.scene import Scene
 from ..mechanics import frames
 from ..mechanics import kepler as el
 from . import equations as eq
-from .disturbing import Context, Gradient, force, term_functions
+from .disturbing import (
+    Context,
+    Gradient,
+    UserPotential,
+    force,
+    perturbation_key,
+    term_functions,
+)
 from .encke import STATE as ENCKE
 from .encke import Encke
 from .revolutions import Revolutions
@@ -95,11 +102,14 @@ def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
     orbit: Orbit = scene.model
     prec = scene.integrator.precision
     pars = ParTable(prec)
-    mu = pars.add("mu", orbit.mu)
+    mu = pars.add("mu", orbit.mu, "orbit.mu")
     plane = _plane_expressions(orbit.plane, pars)
     X = list(hy.make_vars(*CARTESIAN[:3]))
     ctx = Context(mu, pars, prec.dps + _GUARD_DIGITS)
     omegas = term_functions(orbit.perturbations, X, ctx)
+    for term, omega in zip(orbit.perturbations, omegas, strict=True):
+        if not isinstance(term, UserPotential):  # a text records itself as it is parsed
+            pars.source(f"perturbations.{perturbation_key(term)}", omega)
     t0 = _start_time(scene)
 
     b = _Builder(orbit, pars, plane, mu, omegas, X, prec, ctx)
@@ -130,11 +140,38 @@ def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
     model = Model(
         "orbit", b.system, initial, pars, b.outputs, monitors, conserved, events, b.terminal
     )
+    _provenance(model, orbit)
     if variant is not None:
         # Tilted, the state does not carry Θ, Σ on the reference plane: NaN is their value.
         model.unbounded = ("Theta", "Sigma")
         model.variant, model.variants = variant, variants
     return model
+
+
+def _provenance(model: Model, orbit: Orbit) -> None:
+    """The scene fields of the state and of the parameters (:meth:`Model.initial_field`,
+    :attr:`ParTable.fields`)."""
+    if orbit.initial[0] == "cartesian":
+        start = "orbit.position, orbit.velocity"
+        own = {a: f"orbit.position[{i}]" for i, a in enumerate(CARTESIAN[:3])}
+        own |= {a: f"orbit.velocity[{i}]" for i, a in enumerate(CARTESIAN[3:])}
+    else:
+        start, own = "orbit.elements", {}
+    if orbit.formulation == "cartesian":
+        model.initial_fields = {v: own.get(v, start) for v in model.state_names}
+    else:
+        model.initial_fields = dict.fromkeys(model.state_names, start)
+    derived = {
+        "third_body.": "perturbations.third_body",
+        "zonal.": "perturbations.zonal, orbit.mu",
+        "orbit.equatorial_limit": "orbit.equatorial_limit",
+        "reference_plane.": None,
+    }
+    pars = model.pars
+    for i, name in enumerate(pars.names):
+        if pars.fields[i] is None:
+            field = next((f or name for k, f in derived.items() if name.startswith(k)), start)
+            pars.fields[i] = field
 
 
 def validate(scene: Scene) -> None:

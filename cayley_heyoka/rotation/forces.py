@@ -64,12 +64,18 @@ class HeavyTop:
         )
 
     def potential(self, ctx: ForceContext) -> Expr:
-        Mg = ctx.pars.add("heavy_top.weight", self.weight)
+        where = "forces.heavy_top"
+        Mg = ctx.pars.add("heavy_top.weight", self.weight, f"{where}.weight")
         c = [
-            ctx.pars.add(f"heavy_top.center_of_mass[{j}]", self.center_of_mass[j]) for j in range(3)
+            ctx.pars.add(
+                f"heavy_top.center_of_mass[{j}]",
+                self.center_of_mass[j],
+                f"{where}.center_of_mass[{j}]",
+            )
+            for j in range(3)
         ]
         up = normalised(self.up, ctx.pars.precision)
-        u = [ctx.pars.add(f"heavy_top.up[{i}]", up[i]) for i in range(3)]
+        u = [ctx.pars.add(f"heavy_top.up[{i}]", up[i], f"{where}.up[{i}]") for i in range(3)]
         height = sum(u[i] * sum(ctx.R[i][j] * c[j] for j in range(3)) for i in range(3))
         return -Mg * height
 
@@ -101,10 +107,14 @@ class GravityGradient:
         )
 
     def potential(self, ctx: ForceContext) -> Expr:
-        gm = ctx.pars.add("gravity_gradient.gm", self.gm)
-        d = ctx.pars.add("gravity_gradient.distance", self.distance)
+        where = "forces.gravity_gradient"
+        gm = ctx.pars.add("gravity_gradient.gm", self.gm, f"{where}.gm")
+        d = ctx.pars.add("gravity_gradient.distance", self.distance, f"{where}.distance")
         direction = normalised(self.direction, ctx.pars.precision)
-        u = [ctx.pars.add(f"gravity_gradient.direction[{i}]", direction[i]) for i in range(3)]
+        u = [
+            ctx.pars.add(f"gravity_gradient.direction[{i}]", u_i, f"{where}.direction[{i}]")
+            for i, u_i in enumerate(direction)
+        ]
         ub = [sum(ctx.R[i][j] * u[i] for i in range(3)) for j in range(3)]
         quad = sum(ctx.inertia[j] * ub[j] * ub[j] for j in range(3))
         return -1.5 * gm / (d * d * d) * quad
@@ -139,6 +149,11 @@ class Potential:
 
 
 FORCES = {"heavy_top": HeavyTop, "gravity_gradient": GravityGradient, "potential": Potential}
+
+
+def force_key(force: Any) -> str:
+    """The ``[forces.KEY]`` table of a parsed force."""
+    return next(key for key, cls in FORCES.items() if isinstance(force, cls))
 
 
 def parse_forces(table: Mapping[str, Any]) -> tuple:

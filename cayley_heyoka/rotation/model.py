@@ -26,7 +26,7 @@ from . import attitude as att
 from . import azimuth, invariable_angle, poisson
 from . import equations as eq
 from .charts import RodriguesAtlas, kappa_limit
-from .forces import ForceContext, HeavyTop
+from .forces import ForceContext, HeavyTop, Potential, force_key
 from .scene import RigidBody
 
 AXES = ("x1", "y1", "z1")
@@ -46,7 +46,9 @@ def build_model(scene: Scene) -> Model:
     body: RigidBody = scene.model
     prec = scene.integrator.precision
     pars = ParTable(prec)
-    inertia = [pars.add(name, body.inertia[i]) for i, name in enumerate("ABC")]
+    inertia = [
+        pars.add(name, body.inertia[i], f"body.inertia[{i}]") for i, name in enumerate("ABC")
+    ]
     rates = list(hy.make_vars("p", "q", "r"))
     q0 = body.initial_quaternion(prec)
     rates0 = list(prec.array(body.rates))
@@ -67,7 +69,7 @@ def build_model(scene: Scene) -> Model:
     torque = attitude.torque if attitude else None
     exact = eq.euler_differences(*(exact_fraction(v) for v in body.inertia))
     differences = [
-        pars.add(name, fraction_text(d, prec))
+        pars.add(name, fraction_text(d, prec), "body.inertia")
         for name, d in zip(("B-C", "C-A", "A-B"), exact, strict=True)
     ]
     system = list(zip(rates, eq.euler_rates(differences, rates, inertia, torque), strict=True))
@@ -117,7 +119,32 @@ def build_model(scene: Scene) -> Model:
     model = Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
     # tan(θ/2) n is infinite at a half-turn in both formulations: the attitude is fine there.
     model.unbounded = RODRIGUES if "lambda" in outputs else ()
+    _provenance(model, body, attitude)
     return model
+
+
+def _provenance(model: Model, body: RigidBody, attitude: _Attitude | None) -> None:
+    """The scene fields of the state and of the parameters derived from several numbers
+    (:meth:`Model.initial_field`, :attr:`ParTable.fields`)."""
+    start = f"initial.{body.attitude[0]}" if body.attitude is not None else "initial"
+    fields = {name: f"initial.rates[{i}]" for i, name in enumerate("pqr")}
+    if attitude is not None:
+        # γ = Rᵀu: the attitude and the forces' direction.
+        where = f"{start}, forces" if attitude.direction is not None else start
+        fields |= {str(v): where for v in attitude.variables}
+    model.initial_fields = fields
+    motion = f"body.inertia, initial.rates, {start}"
+    derived = {
+        "chart.kappa_max": "attitude.max_chart_angle",
+        "chart.": start,
+        "momentum_space": motion,
+        "psi.": "body.inertia, initial.rates",
+        "azimuth.": f"{motion}, forces",
+    }
+    pars = model.pars
+    for i, name in enumerate(pars.names):
+        if pars.fields[i] is None:
+            pars.fields[i] = next((f for k, f in derived.items() if name.startswith(k)), None)
 
 
 class _Attitude:
@@ -198,6 +225,7 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     if body.forces:
         names = [[hy.expression(f"R{i + 1}{j + 1}__") for j in range(3)] for i in range(3)]
         V = force_function(body, names, rodrigues_of_matrix(names), inertia, pars)
+        pars.bind({str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
         a.torque = eq.matrix_torque(V, names, R, scaled=(frame, norm2))
         a.potential = hy.subs(V, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
     a.outputs = dict(
@@ -235,7 +263,12 @@ def force_function(body: RigidBody, R, rho_total, inertia, pars: ParTable) -> hy
     """The scene's force function V (the sum of its forces) on the attitude matrix ``R`` and
     the Cayley–Rodrigues parameters ``rho_total`` of the whole attitude."""
     ctx = ForceContext(R, rho_total, inertia, pars)
-    terms = [force.potential(ctx) for force in body.forces]
+    terms = []
+    for force in body.forces:
+        term = force.potential(ctx)
+        if not isinstance(force, Potential):  # a text records itself as it is parsed
+            pars.source(f"forces.{force_key(force)}", term)
+        terms.append(term)
     return terms[0] if len(terms) == 1 else hy.sum(terms)
 
 

@@ -13,6 +13,7 @@ conserved; ``output.principal_function`` adds S = ∫ (T + U) dt.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import heyoka as hy
@@ -20,7 +21,7 @@ import mpmath
 
 from ...core.errors import SceneError
 from ...core.model import Model, ParTable
-from ...core.precision import Number, scene_mpf
+from ...core.precision import Number, Precision, scene_mpf
 from ...core.scene import Scene
 from ..outputs import select_monitors, user_events, wants_principal_function
 from ..scene import Hamiltonian
@@ -76,7 +77,8 @@ def build_model(scene: Scene) -> Model:
         initial.append("0")
     monitors, conserved = select_monitors(scene, monitors, ("energy", "angular_momentum"))
     events = user_events(scene, outputs, pars)
-    return Model(
+    _check_apart(ham, prec)
+    model = Model(
         "hamiltonian",
         system,
         [prec.number(v) for v in initial],
@@ -87,6 +89,45 @@ def build_model(scene: Scene) -> Model:
         events,
         compact=ham.formulation == "elements" or n >= _COMPACT_BODIES,
     )
+    _provenance(model)
+    return model
+
+
+def _check_apart(ham: Hamiltonian, precision: Precision) -> None:
+    """Refuse bodies apart in the scene (its check is exact) but closer than the run's
+    precision resolves their positions: their distance would round to 0 or to its rounding
+    error, and H is singular there."""
+    with mpmath.workdps(precision.dps + _GUARD_DIGITS):
+        G, M = ham.constants["G"], ham.constants["central_mass"]
+        points = [body.state(M, G)[0] for body in ham.bodies]
+        resolution = mpmath.mpf(2) ** (1 - precision.bits)
+        for k, x in enumerate(points):
+            for i in range(k):
+                d = mpmath.norm([a - b for a, b in zip(x, points[i], strict=True)])
+                scale = max(mpmath.norm(x), mpmath.norm(points[i]))
+                if d <= resolution * scale:
+                    raise SceneError(
+                        f"hamiltonian.bodies[{k}]",
+                        f"starts {mpmath.nstr(d, 3)} from hamiltonian.bodies[{i}], within "
+                        f"{precision.name}'s rounding of their positions: H is singular where "
+                        "they meet; move them apart or choose a wider precision",
+                    )
+
+
+def _provenance(model: Model) -> None:
+    """The scene fields of the state (each body's variables come from its table) and of the
+    parameters (:meth:`Model.initial_field`, :attr:`ParTable.fields`)."""
+
+    def body(name: str) -> str | None:
+        digits = re.search(r"(\d+)(?:_start)?$", name)
+        return f"hamiltonian.bodies[{int(digits.group(1)) - 1}]" if digits else None
+
+    model.initial_fields = {v: body(v) or "output.principal_function" for v in model.state_names}
+    pars = model.pars
+    for i, name in enumerate(pars.names):
+        if pars.fields[i] is None and name.startswith("predominant_mass."):
+            start = body(name) if name.endswith("_start") else None
+            pars.fields[i] = start or "hamiltonian.G, hamiltonian.central_mass, hamiltonian.bodies"
 
 
 def _offsets(system: list, outputs: dict, monitors: dict, initial: list[str], pars: ParTable):
