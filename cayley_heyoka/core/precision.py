@@ -441,4 +441,3 @@ def fraction_text(value: Fraction, precision: Precision) -> str:
 
     with mpmath.workdps(precision.dps + 15):
         return mpmath.nstr(mpmath.mpf(value.numerator) / value.denominator, precision.dps + 10)
-
