@@ -43,8 +43,7 @@ def _run(args: argparse.Namespace) -> int:
 
     bar = None
     if show_progress(args):
-        grid = scene.output.time_grid(scene.integrator.precision)
-        bar = time_bar(float(grid[0]), float(grid[-1]))
+        bar = time_bar(scene.time_grid[0], scene.time_grid[-1])
     try:
         result = run(scene, progress=bar.update_to if bar else None)
         code = 0

@@ -35,10 +35,11 @@ from .model import Handover, Model, own_terminal
 from .precision import Precision, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
 from .result import Result, versions
-from .scene import Scene, check_units
+from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals
 
-Progress = Callable[[float], None]
+#: Called with the time reached, in the run's precision (a float, a heyoka real128 or real).
+Progress = Callable[[Any], None]
 
 
 def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: bool = True) -> Result:
@@ -49,7 +50,9 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
     scene
         A validated :class:`~cayley_heyoka.core.scene.Scene`.
     progress
-        Called with the current time after each step (slows stepping; for progress bars).
+        Called with the current time after each step, in the run's precision (a float, a
+        heyoka ``real128`` or ``real``: a quad time beyond 1e308, or one step of 1e-20 at
+        t = 1e15, has no float); it slows stepping (for progress bars).
     raise_on_failure
         If True (the default), a run that stops before the last output time raises
         :class:`IntegrationError`. If False it returns its result, as
@@ -64,6 +67,9 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
 
     Raises
     ------
+    TypeError
+        If ``scene`` is not a :class:`~cayley_heyoka.core.scene.Scene` (a dictionary is
+        built into one with :meth:`~cayley_heyoka.core.scene.Scene.from_dict`).
     SceneError
         If the scene cannot be run (see the module docstring).
     IntegrationError
@@ -73,7 +79,7 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
         On Ctrl-C (or another signal raising KeyboardInterrupt) during the propagation; its
         ``result`` holds what was computed, marked interrupted.
     """
-    propagation = Propagation(scene, progress)
+    propagation = Propagation(require_scene(scene), progress)
     try:
         try:
             propagation.advance()
@@ -159,7 +165,7 @@ class Propagation:
             self._pars = prec.array(model.pars.values)
         check_fits(scene, model)
         check_units(scene, [*model.outputs, *model.monitors])
-        self.grid = scene.output.time_grid(prec)
+        self.grid = scene.time_grid
         require_finite(initial, [f"initial.{n}" for n in model.state_names], "initial state")
         require_finite(self._pars, [f"parameters.{n}" for n in model.pars.names], "parameter")
         self.compiled, self._cached = compile_model(model, scene.integrator)
@@ -685,7 +691,7 @@ class _ProgressCallback:
         self.signals = signals
 
     def __call__(self, ta: Any) -> bool:
-        self.progress(float(ta.time))
+        self.progress(ta.time)
         return not self.signals.received
 
 
@@ -697,10 +703,10 @@ class _HeldProgress:
 
     def __init__(self, callback: _ProgressCallback) -> None:
         self.callback = callback
-        self.times: list[float] = []
+        self.times: list[Any] = []
 
     def __call__(self, ta: Any) -> bool:
-        self.times.append(float(ta.time))
+        self.times.append(ta.time)
         return not self.callback.signals.received
 
     def release(self) -> None:
