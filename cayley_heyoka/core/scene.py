@@ -24,12 +24,13 @@ rounded to double on the way in), so a quadruple-precision run sees ``0.1`` exac
 from __future__ import annotations
 
 import collections
+import contextlib
 import contextvars
 import difflib
 import functools
 import math
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -113,6 +114,23 @@ def number(value: Any, where: str, *, positive: bool = False, nonneg: bool = Fal
 _NOTED: contextvars.ContextVar[list[tuple[str, Number]] | None] = contextvars.ContextVar(
     "scene_numbers", default=None
 )
+
+
+@contextlib.contextmanager
+def checked_numbers(precision: Precision | None = None) -> Iterator[list[tuple[str, Number]]]:
+    """Note every number :func:`number` validates in the block, with its field; at the end of
+    the block hold each in ``precision`` (:meth:`~.precision.Precision.hold`: refused naming
+    its field). Without ``precision`` the caller holds the noted list itself (the scene's
+    precision is known only once its ``[integrator]`` table is read)."""
+    noted: list[tuple[str, Number]] = []
+    token = _NOTED.set(noted)
+    try:
+        yield noted
+    finally:
+        _NOTED.reset(token)
+    if precision is not None:
+        for where, value in noted:
+            precision.hold(value, where)
 
 
 def vector(value: Any, where: str, length: int) -> tuple[Number, ...]:
@@ -468,9 +486,7 @@ class Scene:
         title = data.get("title", "")
         if not isinstance(title, str):
             raise SceneError("title", f"must be a string, got {title!r}")
-        noted: list[tuple[str, Number]] = []
-        token = _NOTED.set(noted)
-        try:
+        with checked_numbers() as noted:
             integrator = IntegratorOptions.parse(data.get("integrator", {}))
             output = OutputOptions.parse(data.get("output", {}), spec.output_keys)
             events_table = data.get("events", {})
@@ -479,8 +495,6 @@ class Scene:
             events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
             monitors = parse_monitors(data.get("monitors", {}))
             model = spec.parse({k: data[k] for k in spec.tables if k in data})
-        finally:
-            _NOTED.reset(token)
         # Every number as written, in the run's precision, before any other use of it.
         precision = integrator.precision
         for where, value in noted:

@@ -55,7 +55,7 @@ def layout_of(study: Study) -> Layout:
     model = FAMILIES[scene.family].build(scene)
     check_units(scene, [*model.outputs, *model.monitors])
     events = tuple(dict.fromkeys(e.name for e in model.events))
-    grid = scene.output.time_grid(scene.integrator.precision)
+    grid = scene.time_grid
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
 
 
