@@ -106,22 +106,26 @@ def _reference(args: argparse.Namespace) -> int:
         return 2
     bar = _Bars(scene) if show_progress(args) else None
     try:
-        outcome = generate_reference(
-            scene,
-            args.digits,
-            args.out,
-            precision=start,
-            tolerance=args.tolerance,
-            max_bits=args.max_bits,
-            stretches=args.checkpoints,
-            keep_work=args.keep_work,
-            overwrite=args.overwrite,
-            method=args.certificate,
-            workers=args.workers,
-            progress=bar.update if bar else None,
-            report=print,
-            command=["cayley-heyoka", *sys.argv[1:]],
-        )
+        try:
+            outcome = generate_reference(
+                scene,
+                args.digits,
+                args.out,
+                precision=start,
+                tolerance=args.tolerance,
+                max_bits=args.max_bits,
+                stretches=args.checkpoints,
+                keep_work=args.keep_work,
+                overwrite=args.overwrite,
+                method=args.certificate,
+                workers=args.workers,
+                progress=bar.update if bar else None,
+                report=print,
+                command=["cayley-heyoka", *sys.argv[1:]],
+            )
+        finally:
+            if bar:  # before any message: a bar drawn after it would end stderr
+                bar.close()
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: what was checkpointed is in {args.out}.work; "
@@ -145,9 +149,6 @@ def _reference(args: argparse.Namespace) -> int:
     except (ValueError, TypeError, RuntimeError) as exc:
         print(f"error: {_option(exc)}", file=sys.stderr)
         return 1 if isinstance(exc, RuntimeError) else 2
-    finally:
-        if bar:
-            bar.close()
     cert = outcome.certificate
     verdict = "certified" if outcome.certified else "NOT CERTIFIED"
     print(

@@ -45,7 +45,11 @@ def _run(args: argparse.Namespace) -> int:
     if show_progress(args):
         bar = time_bar(scene.time_grid[0], scene.time_grid[-1])
     try:
-        result = run(scene, progress=bar.update_to if bar else None)
+        try:
+            result = run(scene, progress=bar.update_to if bar else None)
+        finally:
+            if bar:  # before any message: a bar drawn after it would end stderr
+                bar.close()
         code = 0
     except Interrupted as exc:
         result, code = exc.result, 130
@@ -56,9 +60,6 @@ def _run(args: argparse.Namespace) -> int:
     except SceneError as exc:  # found when the model is built (expressions, event names)
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
-    finally:
-        if bar:
-            bar.close()
     if args.out:
         try:
             result.save(args.out)

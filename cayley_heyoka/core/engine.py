@@ -32,7 +32,7 @@ from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Handover, Model, own_terminal
-from .precision import Precision, exact_fraction
+from .precision import Precision, exact_fraction, rational_mpf
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
 from .result import Result, versions
 from .scene import Scene, check_units, require_scene
@@ -346,7 +346,7 @@ class Propagation:
             taken = self.counters["steps"] + res[3]
             cut = probe is not None and outcome == hy.taylor_outcome.step_limit and limit < left
             if probe is not None:
-                self._estimate(taken, ta.time, budget, cut)
+                self._estimate(taken, ta.dtime, budget, cut)
             if cut:
                 # Resuming this call would change bits (see below): start again, uncut.
                 ta = self._restart()
@@ -464,7 +464,9 @@ class Propagation:
 
     def _estimate(self, steps: int, reached: Any, budget: int, cut: bool) -> None:
         """After a probing call: refuse a run whose first steps show it needs far more steps
-        than its budget, or decide whether a longer probe must look first.
+        than its budget, or decide whether a longer probe must look first. ``reached`` is
+        heyoka's double-length time (hi, lo): at t = -1e25 a double's hi part does not move
+        for millions of steps of length 1, while the lo part counts them.
 
         A span of 1e300 would otherwise spend the whole budget (10⁹ steps: many minutes)
         before stopping. The rate of the first steps (those of a probing call, at most
@@ -489,19 +491,20 @@ class Propagation:
             first, last = self.scene.output.span()
             raise SceneError(
                 "output.times",
-                f"the span to t = {last} needs about "
-                f"{float(needed):.3g} steps (the first {steps} reached t = {reached}), more than "
-                f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
-                "shorten the span, or raise integrator.max_steps if the steps will lengthen",
+                f"the span to t = {last} needs about {_magnitude(needed)} steps (the first "
+                f"{steps} reached t = {reached[0]}), more than {_ESTIMATE_MARGIN} times the "
+                f"step budget integrator.max_steps = {budget}; shorten the span, or raise "
+                "integrator.max_steps if the steps will lengthen",
             )
 
     def _needed(self, steps: int, reached: Any) -> Fraction | None:
         """The steps the whole span needs at the rate of ``steps`` to ``reached`` (None if
         that cannot be told: no time covered, or a non-finite time)."""
-        first, last = self.scene.output.span()
-        start, stop = exact_fraction(first), exact_fraction(last)
+        # From the start the integrator took (the checked grid's), to the (hi, lo) time.
+        start = exact_fraction(str(self.grid[0]))
+        stop = exact_fraction(self.scene.output.span()[1])
         try:
-            covered = exact_fraction(str(reached)) - start
+            covered = sum(exact_fraction(str(part)) for part in reached) - start
         except (ValueError, ArithmeticError):  # the state (and heyoka's time) became NaN
             return None
         if covered <= 0:
@@ -683,6 +686,14 @@ def pass_rows(rows: np.ndarray, given: list[np.ndarray], t: Any, pars: np.ndarra
     event's handler changes the parameters (a row exactly at ``t`` too)."""
     while len(given) < len(rows) and rows[len(given)] <= t:
         given.append(pars.copy())
+
+
+def _magnitude(value: Fraction) -> str:
+    """A positive rational to three digits, beyond a float's range too (a quad span)."""
+    import mpmath
+
+    with mpmath.workdps(10):
+        return mpmath.nstr(rational_mpf(value), 3, min_fixed=0, max_fixed=0)
 
 
 class _ProgressCallback:
