@@ -474,7 +474,20 @@ class Scene:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Scene:
-        """Validate a scene given as nested dictionaries (the TOML document's shape)."""
+        """Validate a scene given as nested dictionaries (the TOML document's shape).
+
+        The one input path of every verb: each number, of any kind
+        :func:`~cayley_heyoka.core.precision.as_number` takes (text, int, float, numpy,
+        Fraction, Decimal, real128, real, mpf), is checked as a scene number and then held in
+        the run's precision (:meth:`~cayley_heyoka.core.precision.Precision.hold`), and the
+        output times are computed there (:attr:`time_grid`), before anything else uses them.
+
+        Raises
+        ------
+        SceneError
+            Naming the field at fault (``output.times.stop``, ``initial.rates[0]``) and the
+            rule, docs/scenes.md ("Numbers", "Limits").
+        """
         from .families import FAMILIES, family_of
 
         if not isinstance(data, Mapping):
