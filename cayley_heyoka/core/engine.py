@@ -32,7 +32,7 @@ from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Handover, Model, own_terminal
-from .precision import Precision, exact_fraction, rational_mpf
+from .precision import Precision, approx, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, require_finite
 from .result import Result, versions
 from .scene import Scene, check_units, require_scene
@@ -491,7 +491,7 @@ class Propagation:
             first, last = self.scene.output.span()
             raise SceneError(
                 "output.times",
-                f"the span to t = {last} needs about {_magnitude(needed)} steps (the first "
+                f"the span to t = {last} needs about {approx(needed)} steps (the first "
                 f"{steps} reached t = {reached[0]}), more than {_ESTIMATE_MARGIN} times the "
                 f"step budget integrator.max_steps = {budget}; shorten the span, or raise "
                 "integrator.max_steps if the steps will lengthen",
@@ -686,14 +686,6 @@ def pass_rows(rows: np.ndarray, given: list[np.ndarray], t: Any, pars: np.ndarra
     event's handler changes the parameters (a row exactly at ``t`` too)."""
     while len(given) < len(rows) and rows[len(given)] <= t:
         given.append(pars.copy())
-
-
-def _magnitude(value: Fraction) -> str:
-    """A positive rational to three digits, beyond a float's range too (a quad span)."""
-    import mpmath
-
-    with mpmath.workdps(10):
-        return mpmath.nstr(rational_mpf(value), 3, min_fixed=0, max_fixed=0)
 
 
 class _ProgressCallback:

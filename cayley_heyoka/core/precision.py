@@ -496,6 +496,15 @@ def shown(value: Any) -> str:
     return text if len(text) <= 60 else f"{text[:24]}…{text[-12:]} ({len(text)} characters)"
 
 
+def approx(value: Fraction, digits: int = 3) -> str:
+    """A rational to ``digits`` significant digits, beyond a float's range too (the steps a
+    quad span of 1e4000 needs): ``2.17e+305``."""
+    import mpmath
+
+    with mpmath.workdps(digits + 5):
+        return mpmath.nstr(rational_mpf(value), digits, min_fixed=0, max_fixed=0)
+
+
 def scene_mpf(value: Any) -> Any:
     """A scene number as an mpmath number, correctly rounded to mpmath's current precision
     (:func:`rational_mpf`); an mpmath number is returned as it is."""

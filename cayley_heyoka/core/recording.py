@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -13,7 +12,7 @@ import numpy as np
 from .compiler import Compiled, flat_outputs
 from .errors import SceneError
 from .model import Model
-from .precision import Precision, exact_fraction
+from .precision import Precision, approx, exact_fraction, shown
 from .result import EventLog
 from .scene import Scene
 
@@ -45,7 +44,7 @@ def check_fits(scene: Scene, model: Model) -> None:
         if steps > options.max_steps:
             raise SceneError(
                 "integrator.max_step",
-                f"{options.max_step} needs at least {float(Fraction(steps)):.3g} steps from "
+                f"{shown(options.max_step)} needs at least {approx(steps)} steps from "
                 f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
                 f"{options.max_steps}",
             )

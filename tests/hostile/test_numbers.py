@@ -127,6 +127,17 @@ def test_a_start_whose_spacing_exceeds_the_steps_is_refused_not_run_for_ever(hos
     assert "needs about" in o.error_line
 
 
+@pytest.mark.covers("class:1", "key:integrator.max_step")
+def test_a_step_cap_over_a_quad_span_beyond_double_is_refused_by_its_count(hostile):
+    """The steps it needs (1e8000) were printed through float(): an OverflowError."""
+    data = body(grid("0", "1e4000", 3), "quad")
+    data["integrator"]["max_step"] = Raw('"1e-4000"')
+    o = hostile.run(
+        ["run", str(hostile.scene(data))], expect="refused", field="integrator.max_step"
+    )
+    assert "needs at least 1.0e+8000 steps" in o.error_line
+
+
 @pytest.mark.covers("class:1", "api:time_bar")
 @pytest.mark.parametrize(
     ("t0", "t1", "t", "fraction"),
