@@ -222,7 +222,14 @@ def test_a_huge_integer_is_refused_in_double_and_shown_as_itself():
     assert "0" * 60 not in exc.value.constraint
 
 
-@pytest.mark.covers("class:10", "api:run", "api:check_scene", "api:generate_reference")
+@pytest.mark.covers(
+    "class:10",
+    "api:run",
+    "api:check_scene",
+    "api:generate_reference",
+    "api:propagate_ensemble",
+    "api:run_sweep",
+)
 def test_a_dictionary_is_not_a_scene(tmp_path):
     """run(dict) raised AttributeError deep inside."""
     data = body(grid("0", "1", 2))
@@ -233,11 +240,11 @@ def test_a_dictionary_is_not_a_scene(tmp_path):
         lambda: ch.propagate_ensemble(data, [[0.1, 0.2, 0.3]], 1),
     ]
     for call in calls:
-        with pytest.raises(
-            TypeError, match=r"scene must be a Scene \(build it with Scene.from_dict"
-        ):
+        with pytest.raises(TypeError, match=r"scene must be a Scene \(build it with Scene\.from_"):
             call()
     assert not (tmp_path / "r.h5").exists()
+    with pytest.raises(TypeError, match=r"study must be a Study \(build it with Study\.from_"):
+        ch.run_sweep({"title": "s", "scene": data, "sweep": {}})
 
 
 @pytest.mark.covers("class:10", "api:propagate_ensemble")
