@@ -499,6 +499,8 @@ def shown(value: Any) -> str:
 def approx(value: Fraction, digits: int = 3) -> str:
     """A rational to ``digits`` significant digits, beyond a float's range too (the steps a
     quad span of 1e4000 needs): ``2.17e+305``."""
+    if abs(value) < Fraction(10) ** 300:
+        return f"{float(value):.{digits}g}"
     import mpmath
 
     with mpmath.workdps(digits + 5):

@@ -285,47 +285,61 @@ class OutputOptions:
             not enough: 0.1 and 0.10000000000000000001 are one double), a time or the span
             from the first to the last is beyond the precision's range.
         """
-        if self.times is not None:
-            grid = precision.array(self.times)
-        elif self._grid()[2] == 1:
-            grid = precision.array([self._grid()[0]])
-        else:
-            start, stop, count = self._grid()
-            a, b = precision.number(start), precision.number(stop)
-            n = precision.number(count - 1)
-            if precision.kind == "double":
-                grid = _double_grid(a, b, count)
-            else:
-                # Quad and MPFR cannot overflow here: (b - a) k is below 2e4007 (scene numbers
-                # are within 1e±4000, counts within 1e7), far inside both ranges.
-                grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
-        wild = np.flatnonzero(~np.isfinite(grid))
-        if len(wild):
+        return _time_grid(self.times, self.grid, precision)
+
+
+@functools.lru_cache(maxsize=16)
+def _time_grid(
+    times: tuple[Number, ...] | None, spec: tuple[Number, Number, int] | None, precision: Precision
+) -> np.ndarray:
+    """:meth:`OutputOptions.time_grid`, computed once for the members of a sweep, which share
+    their base scene's output times (a quad grid of 1000 times costs ~3 ms)."""
+    if times is not None:
+        grid = precision.array(times)
+    else:
+        assert spec is not None, "output options with neither times nor a grid"
+        grid = _spaced(*spec, precision)
+    wild = np.flatnonzero(~np.isfinite(grid))
+    if len(wild):
+        raise SceneError(
+            "output.times",
+            f"time [{wild[0]}] is {grid[wild[0]]} in {precision.name}: the grid overflows",
+        )
+    with np.errstate(over="ignore"):
+        span = grid[-1] - grid[0]
+    if not np.isfinite(span):
+        # Quad and MPFR cannot get here (see above); heyoka measures a run by its span.
+        raise SceneError(
+            "output.times",
+            f"spans {float(grid[0])!r} to {float(grid[-1])!r}, a length beyond "
+            f"{precision.name}'s range (about 1.8e308): the integrator cannot measure it; "
+            "shorten the span or choose quad",
+        )
+    if len(grid) > 1:
+        same = np.flatnonzero(~(grid[1:] > grid[:-1]))
+        if len(same):
+            i = int(same[0])
             raise SceneError(
                 "output.times",
-                f"time [{wild[0]}] is {grid[wild[0]]} in {precision.name}: the grid overflows",
+                f"must be strictly increasing in {precision.name}: times [{i}] and "
+                f"[{i + 1}] are both {grid[i]} once rounded; space them further or raise "
+                "the precision",
             )
-        with np.errstate(over="ignore"):
-            span = grid[-1] - grid[0]
-        if not np.isfinite(span):
-            # Quad and MPFR cannot get here (see above); heyoka measures a run by its span.
-            raise SceneError(
-                "output.times",
-                f"spans {float(grid[0])!r} to {float(grid[-1])!r}, a length beyond "
-                f"{precision.name}'s range (about 1.8e308): the integrator cannot measure it; "
-                "shorten the span or choose quad",
-            )
-        if len(grid) > 1:
-            same = np.flatnonzero(~(grid[1:] > grid[:-1]))
-            if len(same):
-                i = int(same[0])
-                raise SceneError(
-                    "output.times",
-                    f"must be strictly increasing in {precision.name}: times [{i}] and "
-                    f"[{i + 1}] are both {grid[i]} once rounded; space them further or raise "
-                    "the precision",
-                )
-        return grid
+    grid.flags.writeable = False  # shared by the scenes that have these times
+    return grid
+
+
+def _spaced(start: Number, stop: Number, count: int, precision: Precision) -> np.ndarray:
+    """``{start, stop, count}`` in ``precision``: ``a + (b - a) k / (count - 1)``."""
+    if count == 1:
+        return precision.array([start])
+    a, b = precision.number(start), precision.number(stop)
+    if precision.kind == "double":
+        return _double_grid(a, b, count)
+    # Quad and MPFR cannot overflow here: (b - a) k is below 2e4007 (scene numbers are within
+    # 1e±4000, counts within 1e7), far inside both ranges.
+    n = precision.number(count - 1)
+    return np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
 
 
 def _double_grid(a: float, b: float, count: int) -> np.ndarray:
@@ -520,12 +534,10 @@ class Scene:
 
     @functools.cached_property
     def time_grid(self) -> np.ndarray:
-        """The output times in the run's precision, checked (:meth:`OutputOptions.time_grid`)
-        when the scene is loaded; the engine, the progress bars, references and checks all
-        take this one."""
-        grid = self.output.time_grid(self.integrator.precision)
-        grid.flags.writeable = False
-        return grid
+        """The output times in the run's precision (read-only), checked
+        (:meth:`OutputOptions.time_grid`) when the scene is loaded; the engine, the progress
+        bars, references and checks all take this one."""
+        return self.output.time_grid(self.integrator.precision)
 
     def __getstate__(self) -> dict[str, Any]:
         # The checked grid is recomputed where the scene is unpickled (a sweep's worker), not
