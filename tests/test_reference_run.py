@@ -133,8 +133,8 @@ def test_uncertified_reference_is_written_and_marked(tmp_path, capsys):
     [
         (["--digits", "0"], "digits must be an integer >= 1, got 0"),
         (["--digits", "20", "--tolerance", "0"], "tolerance must be a number > 0"),
-        (["--digits", "20", "--precision", "huge"], "--precision: must be double, quad or"),
-        (["--digits", "60", "--max-bits", "128"], "max_bits (128) is below the precision needed"),
+        (["--digits", "20", "--precision", "huge"], "--precision must be double, quad or"),
+        (["--digits", "60", "--max-bits", "128"], "--max-bits (128) is below the precision needed"),
     ],
 )
 def test_bad_arguments_are_named(tmp_path, capsys, args, message):

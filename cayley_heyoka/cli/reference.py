@@ -89,35 +89,43 @@ def command(args: argparse.Namespace) -> int:
 
 
 def _reference(args: argparse.Namespace) -> int:
-    from ..core.errors import SceneError
+    from ..core.errors import OptionError, SceneError
     from ..core.files import WriteFailed
     from ..core.scene import load_scene
     from ..workflows.reference import generate_reference, label
 
     try:
         scene = load_scene(args.scene)
-        start = _parse_precision(args.precision)
     except SceneError as exc:
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
+    try:
+        start = _parse_precision(args.precision)
+    except OptionError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     bar = _Bars(scene) if show_progress(args) else None
     try:
-        outcome = generate_reference(
-            scene,
-            args.digits,
-            args.out,
-            precision=start,
-            tolerance=args.tolerance,
-            max_bits=args.max_bits,
-            stretches=args.checkpoints,
-            keep_work=args.keep_work,
-            overwrite=args.overwrite,
-            method=args.certificate,
-            workers=args.workers,
-            progress=bar.update if bar else None,
-            report=print,
-            command=["cayley-heyoka", *sys.argv[1:]],
-        )
+        try:
+            outcome = generate_reference(
+                scene,
+                args.digits,
+                args.out,
+                precision=start,
+                tolerance=args.tolerance,
+                max_bits=args.max_bits,
+                stretches=args.checkpoints,
+                keep_work=args.keep_work,
+                overwrite=args.overwrite,
+                method=args.certificate,
+                workers=args.workers,
+                progress=bar.update if bar else None,
+                report=print,
+                command=["cayley-heyoka", *sys.argv[1:]],
+            )
+        finally:
+            if bar:  # before any message: a bar drawn after it would end stderr
+                bar.close()
     except KeyboardInterrupt:
         print(
             f"\ninterrupted: what was checkpointed is in {args.out}.work; "
@@ -125,6 +133,9 @@ def _reference(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
+    except OptionError as exc:  # an option the scene refuses: named as the command line has it
+        print(f"error: {_option(exc)}", file=sys.stderr)
+        return 2
     except SceneError as exc:  # found when the model is built or its output times rounded
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
@@ -135,12 +146,9 @@ def _reference(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 1
-    except (ValueError, RuntimeError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2 if isinstance(exc, ValueError) else 1
-    finally:
-        if bar:
-            bar.close()
+    except (ValueError, TypeError, RuntimeError) as exc:
+        print(f"error: {_option(exc)}", file=sys.stderr)
+        return 1 if isinstance(exc, RuntimeError) else 2
     cert = outcome.certificate
     verdict = "certified" if outcome.certified else "NOT CERTIFIED"
     print(
@@ -151,32 +159,55 @@ def _reference(args: argparse.Namespace) -> int:
     return 0 if outcome.certified else 1
 
 
+#: The keyword arguments of generate_reference that this command's options give.
+_OPTIONS = {
+    "digits": "--digits",
+    "precision": "--precision",
+    "tolerance": "--tolerance",
+    "max_bits": "--max-bits",
+    "checkpoints (stretches of a run)": "--checkpoints",
+    "workers": "--workers",
+}
+
+
+def _option(exc: Exception) -> str:
+    """The refusal of a keyword argument, with the name of the option that gave it."""
+    text = str(exc)
+    for keyword, option in _OPTIONS.items():
+        if text.startswith(keyword + " ") or text.startswith(keyword + ":"):
+            return option + text[len(keyword) :]
+    return text
+
+
 def _parse_precision(text: str | None) -> Precision | None:
-    """``--precision`` as a :class:`~cayley_heyoka.core.precision.Precision`, or None."""
-    from ..core.errors import SceneError
+    """``--precision`` as a :class:`~cayley_heyoka.core.precision.Precision`, or None; bits
+    within a scene's limits (``Precision.from_spec``), refused by the option's name."""
+    from ..core.errors import OptionError, SceneError
     from ..core.precision import Precision
 
     if text is None:
         return None
     if text in ("double", "quad"):
         return Precision(text)
-    if text.isdigit():
-        return Precision("real", int(text))
-    raise SceneError("--precision", f"must be double, quad or a number of bits, got {text!r}")
+    if text.isascii() and text.isdigit() and len(text) < 10:
+        try:
+            return Precision.from_spec({"bits": int(text)})
+        except SceneError as exc:
+            raise OptionError("--precision", f"(bits) {exc.constraint}") from None
+    raise OptionError("--precision", f"must be double, quad or a number of bits, got {text!r}")
 
 
 class _Bars:
     """One progress bar per run."""
 
     def __init__(self, scene: Scene) -> None:
-        from ..core.precision import Precision
-
-        grid = scene.output.time_grid(Precision())
-        self.t0, self.t1 = float(grid[0]), float(grid[-1])
+        # The scene's checked grid, in its own precision: each run's times (in its precision,
+        # or the closed form's) are placed on it.
+        self.t0, self.t1 = scene.time_grid[0], scene.time_grid[-1]
         self.bar = None
         self.label = None
 
-    def update(self, label: str, t: float) -> None:
+    def update(self, label: str, t: Any) -> None:
         from .show import time_bar
 
         if label != self.label:

@@ -43,10 +43,13 @@ def _run(args: argparse.Namespace) -> int:
 
     bar = None
     if show_progress(args):
-        grid = scene.output.time_grid(scene.integrator.precision)
-        bar = time_bar(float(grid[0]), float(grid[-1]))
+        bar = time_bar(scene.time_grid[0], scene.time_grid[-1])
     try:
-        result = run(scene, progress=bar.update_to if bar else None)
+        try:
+            result = run(scene, progress=bar.update_to if bar else None)
+        finally:
+            if bar:  # before any message: a bar drawn after it would end stderr
+                bar.close()
         code = 0
     except Interrupted as exc:
         result, code = exc.result, 130
@@ -57,9 +60,6 @@ def _run(args: argparse.Namespace) -> int:
     except SceneError as exc:  # found when the model is built (expressions, event names)
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
-    finally:
-        if bar:
-            bar.close()
     if args.out:
         try:
             result.save(args.out)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
@@ -10,33 +11,90 @@ if TYPE_CHECKING:
     from ..core.result import Result
 
 
-def time_bar(t0: float, t1: float, desc: str | None = None, file: Any = None) -> Any:
+def time_bar(t0: Any, t1: Any, desc: str | None = None, file: Any = None) -> Any:
     """A progress bar of simulated time on stderr: ``t = 3141.59 of 6283.19  50%``.
 
-    ``update_to(t)`` moves it to time ``t``; times are shown to six significant digits (the
-    bar's own counter, t − t0, would print every digit of a float).
+    ``t0`` and ``t1`` are the first and last output times of the scene's checked grid
+    (:attr:`~cayley_heyoka.core.scene.Scene.time_grid`), in the run's precision: a float, a
+    heyoka ``real128`` or ``real``. ``update_to(t)`` moves the bar to time ``t`` (any of
+    those types). The bar counts the fraction of the span done, computed on halves in the
+    times' own type: ``t1 - t0`` overflows a double for ``[-1e308, 1e308]``, and a quad span
+    beyond double's range has no float at all. Times are shown with six significant digits,
+    or as many more as tell ``t0`` from ``t1`` (``[1e15, 1e15 + 1e-3]``), up to the
+    precision's own.
     """
     from tqdm import tqdm
 
+    span = _Span(t0, t1)
+
     class Bar(tqdm):
+        t: Any = t0
+
         @property
         def format_dict(self) -> dict:
             d = super().format_dict
-            d["t_now"], d["t_end"] = f"{t0 + d['n']:.6g}", f"{t1:.6g}"
+            d["t_now"], d["t_end"] = span.text(self.t), span.text(t1)
             return d
 
-        def update_to(self, t: float) -> None:
-            self.n = min(max(float(t) - t0, 0.0), self.total)
+        def update_to(self, t: Any) -> None:
+            self.t = t
+            self.n = span.fraction(t)
             self.refresh() if self.n >= self.total else self.update(0)
 
     label = f"{desc}: " if desc else ""
     return Bar(
-        total=t1 - t0,
+        total=1.0,
         file=file or sys.stderr,
         mininterval=0.2,
         dynamic_ncols=True,
         bar_format=label + "t = {t_now} of {t_end} {percentage:4.0f}%|{bar}| {elapsed}<{remaining}",
     )
+
+
+class _Span:
+    """The fraction of ``[t0, t1]`` reached, and times as text, in any precision."""
+
+    def __init__(self, t0: Any, t1: Any) -> None:
+        import mpmath
+
+        self.mpmath = mpmath  # held: a bar closed at exit draws after imports are torn down
+        self.t0 = t0
+        # Halves: finite for any two finite numbers of the type, where t1 - t0 may overflow.
+        self.half = t1 / 2 - t0 / 2
+        self.empty = not self.half > 0
+        bits = 113 if type(t0).__name__ == "real128" else int(getattr(t0, "prec", 53))
+        self.most = int(bits * 0.30103) + 2  # the digits that round-trip the precision
+        self.bits = bits + 64
+        with mpmath.workprec(self.bits):
+            a, b = _mpf(t0), _mpf(t1)
+            width = b - a
+            large = max(abs(a), abs(b))
+            extra = 0 if self.empty or large == 0 else int(mpmath.log10(large / width))
+        self.digits = max(6, min(self.most, 6 + extra))
+
+    def fraction(self, t: Any) -> float:
+        """``(t - t0) / (t1 - t0)`` in [0, 1] (0 for a NaN, 1 at or past ``t1`` of an empty
+        span)."""
+        if self.empty:
+            return 1.0 if t >= self.t0 else 0.0
+        try:
+            f = float((t / 2 - self.t0 / 2) / self.half)
+        except (ArithmeticError, TypeError, ValueError):
+            return 0.0
+        return min(max(f, 0.0), 1.0) if f == f else 0.0
+
+    def text(self, t: Any) -> str:
+        if isinstance(t, float) and math.isfinite(t):
+            return f"{t:.{self.digits}g}"
+        with self.mpmath.workprec(self.bits):
+            return self.mpmath.nstr(_mpf(t), self.digits, min_fixed=-4, max_fixed=self.digits)
+
+
+def _mpf(value: Any) -> Any:
+    """A float, real128 or real as mpmath reads its decimal text (which round-trips)."""
+    import mpmath
+
+    return mpmath.mpf(repr(float(value)) if isinstance(value, float) else str(value))
 
 
 def summary(result: Result) -> str:

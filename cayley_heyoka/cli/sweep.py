@@ -66,15 +66,19 @@ def _sweep(args: argparse.Namespace) -> int:
 
         bar = tqdm(total=study.size, unit="member", file=sys.stderr, dynamic_ncols=True)
     try:
-        result = run_sweep(
-            study,
-            out=args.out,
-            backend=args.backend,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            chunk=args.chunk,
-            progress=(lambda done, total: bar.update(done - bar.n)) if bar else None,
-        )
+        try:
+            result = run_sweep(
+                study,
+                out=args.out,
+                backend=args.backend,
+                scheduler=args.scheduler,
+                workers=args.workers,
+                chunk=args.chunk,
+                progress=(lambda done, total: bar.update(done - bar.n)) if bar else None,
+            )
+        finally:
+            if bar:  # before any message: a bar drawn after it would end stderr
+                bar.close()
     except SceneError as exc:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
@@ -86,9 +90,6 @@ def _sweep(args: argparse.Namespace) -> int:
         if args.out and args.out.exists():
             print(f"what was computed is in {args.out}", file=sys.stderr)
         return 1
-    finally:
-        if bar:
-            bar.close()
     print(result.summary())
     if args.out:
         print(f"sweep written to {args.out}")

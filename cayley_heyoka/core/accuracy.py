@@ -15,9 +15,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from decimal import Decimal
+from fractions import Fraction
 from typing import Any
 
 import mpmath
+import numpy as np
+
+from .precision import NUMBER_KINDS, as_number, rational_mpf
 
 __all__ = [
     "Certified",
@@ -68,8 +73,10 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
     """Convert an input number *exactly*: decimal text at the current precision, floats exactly.
 
     Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float is
-    taken at its exact binary value, never through ``str``, and so is a heyoka ``real128`` or
-    ``real`` (a quad or MPFR result's times and states).
+    taken at its exact binary value, never through ``str``, and so are a numpy float (float16
+    to longdouble) and a heyoka ``real128`` or ``real`` (a quad or MPFR result's times and
+    states); a ``Fraction`` or ``Decimal`` is correctly rounded at the current precision, a
+    numpy integer is an int (the kinds of :func:`~cayley_heyoka.core.precision.as_number`).
     """
     if isinstance(x, bool):
         raise TypeError(f"{name}: expected a number, got a bool")
@@ -85,11 +92,23 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
         bits = 113 if type(x).__name__ == "real128" else int(number.prec)
         with mpmath.workprec(bits):
             value = mpmath.mpf(str(x))
+    elif isinstance(x, Fraction):
+        value = rational_mpf(x)
+    elif isinstance(x, Decimal):
+        value = rational_mpf(Fraction(x)) if x.is_finite() else mpmath.nan
+    elif isinstance(x, np.floating) and x.dtype.itemsize > 8:
+        if not np.isfinite(x):
+            raise ValueError(f"{name} must be finite, got {x!r}")
+        m, d = x.as_integer_ratio()  # d is a power of two: the division is exact
+        with mpmath.workprec(max(mpmath.mp.prec, m.bit_length())):
+            value = mpmath.mpf(m) / d
     else:
+        if isinstance(x, np.number):
+            x = as_number(x) if np.isfinite(x) else float(x)  # an int or a float, exactly
         try:
             value = mpmath.mpf(x)
         except (ValueError, TypeError) as exc:
-            raise TypeError(f"{name}: {x!r} is not a real number") from exc
+            raise TypeError(f"{name}: {x!r} is not a real number ({NUMBER_KINDS})") from exc
     if not mpmath.isfinite(value):
         raise ValueError(f"{name} must be finite, got {x!r}")
     return value

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from decimal import Decimal
 from fractions import Fraction
 
 import mpmath
+import numpy as np
 from flint import arb
 
 from .accuracy import to_mpf
@@ -36,8 +38,12 @@ def ball(x: object, name: str = "value") -> arb:
         text = x.strip()
         to_mpf(text, name)  # the same refusals as the mpmath path (not a number, not finite)
         return arb(text)
+    if isinstance(x, Decimal) and x.is_finite():
+        x = Fraction(x)
     if isinstance(x, Fraction):
         return arb(x.numerator) / arb(x.denominator)
+    if isinstance(x, int | np.integer) and not isinstance(x, bool):
+        return arb(int(x))  # exact: to_mpf would round it to mpmath's precision
     if isinstance(x, mpmath.mpf):  # as it is: to_mpf would round it to mpmath's precision
         if not mpmath.isfinite(x):
             raise ValueError(f"{name} must be finite, got {x!r}")

@@ -16,16 +16,20 @@ import numpy as np
 
 from .certificate import Certificate, worst
 from .precision import Precision
-from .scene import Scene
+from .scene import Scene, with_options
 
 
-def with_precision(scene: Scene, prec: Precision, tolerance: str | None) -> Scene:
-    data = scene.to_dict()
-    integ = dict(data.get("integrator", {}))
-    integ["precision"] = prec.to_spec()
-    integ["tolerance"] = "auto" if tolerance is None else tolerance
-    data["integrator"] = integ
-    return Scene.from_dict(data)
+def with_precision(scene: Scene, prec: Precision, tolerance: Any = None) -> Scene:
+    """``scene`` in ``prec`` with ``tolerance`` (None: the precision's epsilon), checked as
+    the scene's own fields are; a refusal names ``precision`` or ``tolerance``
+    (:class:`~cayley_heyoka.core.errors.OptionError`)."""
+    return with_options(
+        scene,
+        {
+            "integrator.precision": ("precision", prec.to_spec()),
+            "integrator.tolerance": ("tolerance", "auto" if tolerance is None else tolerance),
+        },
+    )
 
 
 class ClosedForm:
@@ -51,7 +55,7 @@ class ClosedForm:
 
         variant = with_precision(self.scene, prec, None)
         model = FAMILIES[variant.family].build(variant)
-        grid = variant.output.time_grid(prec)
+        grid = variant.time_grid
         return self._job(variant, model, prec, prec.to_text(grid[:1])[0])
 
     def _job(self, variant: Scene, model: Any, prec: Precision, t0: str) -> Any:
@@ -83,12 +87,12 @@ class ClosedForm:
         wall = time.perf_counter()
         variant = with_precision(self.scene, prec, None)
         model = FAMILIES[variant.family].build(variant)
-        grid = variant.output.time_grid(prec)
+        grid = variant.time_grid
         texts = list(prec.to_text(grid))
         job = self._job(variant, model, prec, texts[0])
         tick = None
         if progress is not None:
-            tick = lambda done: progress("closed form", float(grid[done - 1]))  # noqa: E731
+            tick = lambda done: progress("closed form", grid[done - 1])  # noqa: E731
         rows, (events, event_errors), resumed = evaluate(
             job, texts, workers, tick, lambda: self._events(job, model, prec, grid), store
         )

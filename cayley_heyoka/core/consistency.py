@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
+from .precision import Number, Precision
+from .scene import checked_numbers, number
 
 
 @dataclass(frozen=True)
@@ -127,7 +129,8 @@ class CheckReport:
 class CheckOptions:
     """Options of a consistency check, as text (``cayley-heyoka check --set KEY=VALUE``).
 
-    A check reads the options it takes with :meth:`text`, :meth:`integer` or :meth:`choice`
+    A check reads the options it takes with :meth:`text`, :meth:`number`, :meth:`integer` or
+    :meth:`choice`
     after declaring them with :meth:`accept`, which refuses any other key, naming the keys the
     check takes.
     """
@@ -144,6 +147,16 @@ class CheckOptions:
 
     def text(self, key: str) -> str | None:
         return self.values.get(key)
+
+    def number(self, key: str, precision: Precision) -> Number | None:
+        """A number option, held by ``precision`` (the scene's): refused as ``--set KEY``
+        by the same rules as a scene's numbers (:func:`~.scene.number`,
+        :meth:`~.precision.Precision.hold`)."""
+        value = self.values.get(key)
+        if value is None:
+            return None
+        with checked_numbers(precision):
+            return number(value, f"--set {key}")
 
     def integer(self, key: str, minimum: int = 1, maximum: int = 10**6) -> int | None:
         value = self.values.get(key)

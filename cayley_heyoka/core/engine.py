@@ -35,20 +35,14 @@ from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
 from .model import Handover, Model, own_terminal
-from .precision import Precision, exact_fraction
-from .recording import (
-    check_fits,
-    evaluate_outputs,
-    event_logs,
-    first_nonfinite,
-    magnitude,
-    start_values,
-)
+from .precision import Precision, approx, exact_fraction
+from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, start_values
 from .result import Result, versions
-from .scene import Scene, check_units
+from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals
 
-Progress = Callable[[float], None]
+#: Called with the time reached, in the run's precision (a float, a heyoka real128 or real).
+Progress = Callable[[Any], None]
 
 
 def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: bool = True) -> Result:
@@ -59,7 +53,9 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
     scene
         A validated :class:`~cayley_heyoka.core.scene.Scene`.
     progress
-        Called with the current time after each step (slows stepping; for progress bars).
+        Called with the current time after each step, in the run's precision (a float, a
+        heyoka ``real128`` or ``real``: a quad time beyond 1e308, or one step of 1e-20 at
+        t = 1e15, has no float); it slows stepping (for progress bars).
     raise_on_failure
         If True (the default), a run that stops before the last output time raises
         :class:`IntegrationError`. If False it returns its result, as
@@ -74,6 +70,9 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
 
     Raises
     ------
+    TypeError
+        If ``scene`` is not a :class:`~cayley_heyoka.core.scene.Scene` (a dictionary is
+        built into one with :meth:`~cayley_heyoka.core.scene.Scene.from_dict`).
     SceneError
         If the scene cannot be run (see the module docstring).
     IntegrationError
@@ -83,7 +82,7 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
         On Ctrl-C (or another signal raising KeyboardInterrupt) during the propagation; its
         ``result`` holds what was computed, marked interrupted.
     """
-    propagation = Propagation(scene, progress)
+    propagation = Propagation(require_scene(scene), progress)
     try:
         try:
             propagation.advance()
@@ -168,7 +167,7 @@ class Propagation:
             initial, self._pars = start_values(model, prec)
         check_fits(scene, model)
         check_units(scene, [*model.outputs, *model.monitors])
-        self.grid = scene.output.time_grid(prec)
+        self.grid = scene.time_grid
         self.compiled, self._cached = compile_model(model, scene.integrator)
         self._compile_seconds = 0.0 if self._cached else self.compiled.compile_seconds
         self._first = model
@@ -345,7 +344,7 @@ class Propagation:
             taken = self.counters["steps"] + res[3]
             cut = probe is not None and outcome == hy.taylor_outcome.step_limit and limit < left
             if probe is not None:
-                self._estimate(taken, ta.time, budget, cut)
+                self._estimate(taken, ta.dtime, budget, cut)
             if cut:
                 # Resuming this call would change bits (see below): start again, uncut.
                 ta = self._restart()
@@ -472,7 +471,9 @@ class Propagation:
 
     def _estimate(self, steps: int, reached: Any, budget: int, cut: bool) -> None:
         """After a probing call: refuse a run whose first steps show it needs far more steps
-        than its budget, or decide whether a longer probe must look first.
+        than its budget, or decide whether a longer probe must look first. ``reached`` is
+        heyoka's double-length time (hi, lo): at t = -1e25 a double's hi part does not move
+        for millions of steps of length 1, while the lo part counts them.
 
         A span of 1e300 would otherwise spend the whole budget (10⁹ steps: many minutes)
         before stopping. The rate of the first steps (those of a probing call, at most
@@ -497,19 +498,20 @@ class Propagation:
             first, last = self.scene.output.span()
             raise SceneError(
                 "output.times",
-                f"the span to t = {last} needs about "
-                f"{magnitude(needed)} steps (the first {steps} reached t = {reached}), more than "
-                f"{_ESTIMATE_MARGIN} times the step budget integrator.max_steps = {budget}; "
-                "shorten the span, or raise integrator.max_steps if the steps will lengthen",
+                f"the span to t = {last} needs about {approx(needed)} steps (the first "
+                f"{steps} reached t = {reached[0]}), more than {_ESTIMATE_MARGIN} times the "
+                f"step budget integrator.max_steps = {budget}; shorten the span, or raise "
+                "integrator.max_steps if the steps will lengthen",
             )
 
     def _needed(self, steps: int, reached: Any) -> Fraction | None:
         """The steps the whole span needs at the rate of ``steps`` to ``reached`` (None if
         that cannot be told: no time covered, or a non-finite time)."""
-        first, last = self.scene.output.span()
-        start, stop = exact_fraction(first), exact_fraction(last)
+        # From the start the integrator took (the checked grid's), to the (hi, lo) time.
+        start = exact_fraction(str(self.grid[0]))
+        stop = exact_fraction(self.scene.output.span()[1])
         try:
-            covered = exact_fraction(str(reached)) - start
+            covered = sum(exact_fraction(str(part)) for part in reached) - start
         except (ValueError, ArithmeticError):  # the state (and heyoka's time) became NaN
             return None
         if covered <= 0:
@@ -699,7 +701,7 @@ class _ProgressCallback:
         self.signals = signals
 
     def __call__(self, ta: Any) -> bool:
-        self.progress(float(ta.time))
+        self.progress(ta.time)
         return not self.signals.received
 
 
@@ -711,10 +713,10 @@ class _HeldProgress:
 
     def __init__(self, callback: _ProgressCallback) -> None:
         self.callback = callback
-        self.times: list[float] = []
+        self.times: list[Any] = []
 
     def __call__(self, ta: Any) -> bool:
-        self.times.append(float(ta.time))
+        self.times.append(ta.time)
         return not self.callback.signals.received
 
     def release(self) -> None:

@@ -22,6 +22,18 @@ class SceneError(ValueError):
         super().__init__(f"{field}: {constraint}")
 
 
+class OptionError(SceneError):
+    """An option that sets a scene field (a command-line option such as ``--tolerance``, or a
+    keyword argument such as ``tolerance``) violates that field's constraint: named by the
+    option, not by the scene's field, which the scene's file does not hold.
+
+    ``str()`` reads ``--tolerance must be < 1 …``; :attr:`field` is the option's name.
+    """
+
+    def __str__(self) -> str:
+        return f"{self.field} {self.constraint}"
+
+
 class IntegrationError(RuntimeError):
     """An integration stopped before the last output time.
 

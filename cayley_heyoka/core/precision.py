@@ -13,6 +13,7 @@ import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
+from decimal import Decimal
 from fractions import Fraction
 from typing import Any
 
@@ -36,9 +37,19 @@ class _Heyoka:
 hy: Any = _Heyoka()
 
 Number = float | int | str
-"""A scene number: a Python float/int, or decimal text kept exact until the target type is known."""
+"""A scene number: a Python float/int, or decimal text kept exact until the target type is known.
+
+Every other kind of number enters through :func:`as_number`, which turns it into one of these
+with the same exact value."""
+
+#: The kinds of number :func:`as_number` takes, for messages.
+NUMBER_KINDS = (
+    "an int, a float, decimal text, a fractions.Fraction, a decimal.Decimal, a numpy integer "
+    "or float, a heyoka real128 or real, or an mpmath mpf"
+)
 
 _MIN_BITS = 64
+_SMALLEST_NORMAL = float(np.finfo(float).tiny)
 #: Most significand bits of ``{bits = N}`` (docs/scenes.md, "Numbers"). heyoka's Taylor order
 #: grows with the bits and the compile time faster (one time unit of a free body: 3.4 s at 1024
 #: bits, 39 s at 2048); and the round-off scales of the checks use :attr:`Precision.epsilon`
@@ -162,7 +173,8 @@ class Precision:
         Text follows one grammar in every precision (:func:`decimal_text`). A value that this
         precision cannot hold (beyond double's range, or so small it would round to zero) is
         refused with :class:`SceneError` on ``integrator.precision``: the choice of precision
-        is what cannot carry it.
+        is what cannot carry it. (A scene's own numbers are checked by :meth:`hold` when the
+        scene is loaded, naming their fields; this refusal is for numbers the package derives.)
         """
         if isinstance(value, bool):
             raise TypeError(f"expected a number, got {value!r}")
@@ -190,8 +202,31 @@ class Precision:
         if abs(x) == np.inf or (x == 0) != (exact_fraction(value) == 0):
             raise SceneError(
                 "integrator.precision",
-                f"{self.name} cannot hold {value!r:.60} (it would become {x!r}); choose a "
+                f"{self.name} cannot hold {shown(value)} (it would become {x!r}); choose a "
                 "wider precision or rescale the problem",
+            )
+        return x
+
+    def hold(self, value: Number, where: str) -> Any:
+        """``value`` in the target type, or :class:`SceneError` on ``where`` (the field that
+        wrote it) if this precision cannot hold it to its full significand.
+
+        Refused: a magnitude beyond the type's range, a nonzero value that would round to
+        zero, and in double a nonzero value below the smallest normal number (2.2e-308),
+        which a double keeps with fewer than its 53 bits (quad and multiprecision have no
+        such numbers within the scene's limits, 1e±4000).
+        """
+        try:
+            x = self.number(value)
+        except SceneError as exc:
+            raise SceneError(where, exc.constraint) from None
+        if self.kind == "double" and x != 0 and abs(x) < _SMALLEST_NORMAL:
+            kept = max(1, 53 - (math.frexp(_SMALLEST_NORMAL)[1] - math.frexp(abs(x))[1]))
+            raise SceneError(
+                where,
+                f"{shown(value)} is below double's smallest normal number "
+                f"({_SMALLEST_NORMAL!r}): a double keeps only {kept} of its 53 bits there; "
+                "choose quad or rescale the problem",
             )
         return x
 
@@ -300,15 +335,204 @@ def exact_fraction(value: Number) -> Fraction:
     return Fraction(value)
 
 
+def as_number(value: Any) -> Number:
+    """The one way a number enters: ``value`` as a scene number with the same exact value.
+
+    An int, a float or decimal text is returned as it is (text is checked by
+    :func:`exact_fraction`). Every other kind is turned into one of those, exactly:
+
+    * a numpy integer is an int; a numpy float16, float32 or float64 a float (each is a
+      double exactly), a longer numpy float its exact binary value as decimal text;
+    * a heyoka ``real128`` or ``real`` and an mpmath ``mpf`` are their exact binary value, as
+      a Python float is (a quad 0.1 in a 256-bit run is the quad's 0.1, not 256 bits of 1/10:
+      give text for that);
+    * a ``fractions.Fraction`` or ``decimal.Decimal`` is its exact decimal text; a fraction
+      whose decimal expansion does not end (1/3) is refused, since a scene keeps its numbers
+      as text (its result files store it): give the digits meant as text.
+
+    Raises
+    ------
+    TypeError
+        A bool, or anything that is not one of :data:`NUMBER_KINDS`.
+    ValueError
+        A value that is not finite, a fraction without a finite decimal expansion, or an
+        exact value of more than :data:`MAX_SIGNIFICANT_DIGITS` digits.
+    """
+    if isinstance(value, bool | np.bool_):
+        raise TypeError(f"expected a number, got the bool {value!r}")
+    if isinstance(value, str):
+        return str(value)
+    if isinstance(value, int):
+        return int(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"{float(value)!r} is not finite")
+        return float(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating):
+        if not np.isfinite(value):
+            raise ValueError(f"{value!r} is not finite")
+        if value.dtype.itemsize <= 8:
+            return float(value)
+        m, d = value.as_integer_ratio()
+        return _dyadic_text(m, -(d.bit_length() - 1))
+    if isinstance(value, Fraction):
+        text = exact_decimal(value)
+        if text is None:
+            raise ValueError(
+                f"Fraction({value.numerator}, {value.denominator}) has no finite decimal "
+                "expansion, and a scene keeps its numbers exactly as decimal text: give the "
+                "digits you mean as text"
+            )
+        return text
+    if isinstance(value, Decimal):
+        if not value.is_finite():
+            raise ValueError(f"{value!r} is not finite")
+        return str(value)
+    kind = type(value)
+    if kind.__module__.startswith("heyoka") and kind.__name__ in ("real128", "real"):
+        import mpmath
+
+        # Their decimal text round-trips: read back at their own bits it is the number exactly.
+        bits = 113 if kind.__name__ == "real128" else int(value.prec)
+        with mpmath.workprec(bits):
+            x = mpmath.mpf(str(value))
+        if not mpmath.isfinite(x):
+            raise ValueError(f"{value} is not finite")
+        return _dyadic_text(*dyadic_parts(x))
+    if kind.__module__.startswith("mpmath") and kind.__name__ == "mpf":
+        import mpmath
+
+        if not mpmath.isfinite(value):
+            raise ValueError(f"{value} is not finite")
+        return _dyadic_text(*dyadic_parts(value))
+    raise TypeError(f"expected a number ({NUMBER_KINDS}), got {kind.__name__}")
+
+
+def number_argument(value: Any, name: str, *, positive: bool = False) -> Number:
+    """A number given to the Python API as parameter ``name``, through :func:`as_number` and
+    the limits of scene numbers (:func:`exact_fraction`); compare it with
+    ``exact_fraction(value)``, never through ``float`` (``10**400`` overflows there).
+
+    Raises
+    ------
+    TypeError
+        ``name must be a number (...)``: a bool, or a type :func:`as_number` does not take.
+    ValueError
+        ``name must be ...``: not finite, beyond the limits, or (``positive``) not > 0.
+    """
+    try:
+        number = as_number(value)
+        f = exact_fraction(number)
+    except TypeError:
+        raise TypeError(f"{name} must be a number ({NUMBER_KINDS}), got {shown(value)}") from None
+    except ValueError as exc:
+        raise ValueError(f"{name} must be a finite number: {exc}") from None
+    if positive and f <= 0:
+        raise ValueError(f"{name} must be a number > 0, got {shown(value)}")
+    return number
+
+
+def exact_decimal(value: Fraction) -> str | None:
+    """The exact decimal text of ``value``, or None when it has none (a denominator with a
+    prime factor other than 2 and 5)."""
+    d = value.denominator
+    twos = fives = 0
+    while d % 2 == 0:
+        d //= 2
+        twos += 1
+    while d % 5 == 0:
+        d //= 5
+        fives += 1
+    if d != 1:
+        return None
+    k = max(twos, fives)
+    digits = abs(value.numerator) * 10**k // value.denominator
+    sign = "-" if value < 0 else ""
+    text = str(digits).rjust(k + 1, "0")
+    whole, frac = (text[:-k], text[-k:].rstrip("0")) if k else (text, "")
+    return f"{sign}{whole}.{frac}" if frac else f"{sign}{whole}"
+
+
+def _dyadic_text(m: int, e: int) -> Number:
+    """``m 2ᵉ`` exactly: an int, or decimal text ``M e-K`` (``m 5ᵏ 10⁻ᵏ``, k = −e)."""
+    if m == 0:
+        return 0
+    while m % 2 == 0:
+        m //= 2
+        e += 1
+    if e >= 0:
+        if abs(m).bit_length() + e > _INTEGER_LIMIT.bit_length():
+            raise ValueError(f"{m} x 2^{e} is beyond 1e±{MAX_DECIMAL_EXPONENT}")
+        return m << e
+    digits = abs(m) * 5 ** (-e)
+    # 14000 bits are ~4200 digits: the grammar's digit limit then applies to the text, and
+    # Python's str() of an int (at most 4300 digits) is still allowed.
+    if digits.bit_length() > 14000:
+        raise ValueError(
+            f"its exact value has more than {MAX_SIGNIFICANT_DIGITS} digits (the limit of "
+            "scene numbers): give it as decimal text"
+        )
+    return f"{'-' if m < 0 else ''}{digits}e{e}"
+
+
+def shown(value: Any) -> str:
+    """``value`` for a message, never cut so that it reads as another number: a long integer
+    or text is abbreviated with its magnitude and length (``10**400`` is not 60 digits)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**20:
+        digits = len(str(abs(value))) if abs(value) < _INTEGER_LIMIT else None
+        if digits is None:
+            return f"an integer of {abs(value).bit_length()} bits"
+        lead = str(abs(value))[:6]
+        sign = "-" if value < 0 else ""
+        return f"{sign}{lead[0]}.{lead[1:]}e+{digits - 1} (an integer of {digits} digits)"
+    if isinstance(value, str):
+        text = repr(value)
+        if len(text) <= 60:
+            return text
+        return f"{text[:24]}…{text[-12:]} ({len(value)} characters)"
+    text = repr(value) if isinstance(value, float) else str(value)
+    return text if len(text) <= 60 else f"{text[:24]}…{text[-12:]} ({len(text)} characters)"
+
+
+def approx(value: Fraction, digits: int = 3) -> str:
+    """A rational to ``digits`` significant digits, beyond a float's range too (the steps a
+    quad span of 1e4000 needs): ``2.17e+305``."""
+    if abs(value) < Fraction(10) ** 300:
+        return f"{float(value):.{digits}g}"
+    import mpmath
+
+    with mpmath.workdps(digits + 5):
+        return mpmath.nstr(rational_mpf(value), digits, min_fixed=0, max_fixed=0)
+
+
 def scene_mpf(value: Any) -> Any:
-    """A scene number as an mpmath number, exact to mpmath's current precision (its rational
-    value divided there once); an mpmath number is returned as it is."""
+    """A scene number as an mpmath number, correctly rounded to mpmath's current precision
+    (:func:`rational_mpf`); an mpmath number is returned as it is."""
     import mpmath
 
     if isinstance(value, mpmath.mpf):
         return value
-    f = exact_fraction(value)
-    return mpmath.mpf(f.numerator) / f.denominator
+    return rational_mpf(exact_fraction(value))
+
+
+def rational_mpf(value: Fraction) -> Any:
+    """``value`` correctly rounded (to nearest) at mpmath's current precision.
+
+    ``mpf(numerator) / denominator`` rounds twice (the numerator of π written to 36 digits
+    has 120 bits): at 30 digits it lands above mpmath's π while the exact value is below it,
+    so a range check made exactly and one made in mpmath disagree. Rounding once keeps every
+    comparison with a correctly rounded constant (π, 2π) the same as the exact one.
+    """
+    import mpmath
+    from mpmath import libmp
+
+    if value.denominator == 1:
+        return mpmath.mpf(value.numerator)
+    return mpmath.mp.make_mpf(
+        libmp.from_rational(value.numerator, value.denominator, mpmath.mp.prec, libmp.round_nearest)
+    )
 
 
 def decimal_text(text: str) -> str:

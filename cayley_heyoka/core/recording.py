@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from fractions import Fraction
 from typing import Any
 
 import mpmath
@@ -14,7 +13,7 @@ import numpy as np
 from .compiler import Compiled, flat_outputs
 from .errors import SceneError
 from .model import Model
-from .precision import Precision, exact_fraction
+from .precision import Precision, approx, exact_fraction, shown
 from .result import EventLog
 from .scene import Scene
 
@@ -46,7 +45,7 @@ def check_fits(scene: Scene, model: Model) -> None:
         if steps > options.max_steps:
             raise SceneError(
                 "integrator.max_step",
-                f"{options.max_step} needs at least {magnitude(steps)} steps from "
+                f"{shown(options.max_step)} needs at least {approx(steps)} steps from "
                 f"t = {start} to {stop}, more than the step budget integrator.max_steps = "
                 f"{options.max_steps}",
             )
@@ -105,15 +104,6 @@ def _finite_array(
             fields[i], f"{what[i]} is {out[i]} at the start: it must be finite to integrate"
         )
     return out
-
-
-def magnitude(value: Fraction) -> str:
-    """``value`` to 3 significant digits (``%.3g``), at any magnitude."""
-    try:
-        return f"{float(value):.3g}"
-    except OverflowError:  # beyond double's range (a span of 1e4000 in quad)
-        with mpmath.workdps(20):
-            return mpmath.nstr(mpmath.mpf(value.numerator) / value.denominator, 3)
 
 
 def _short(value: Any) -> str:

@@ -27,6 +27,8 @@ import collections
 import contextlib
 import contextvars
 import difflib
+import functools
+import math
 import tomllib
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -36,8 +38,16 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SceneError
-from .precision import Number, Precision, exact_fraction, unit_length
+from .errors import OptionError, SceneError
+from .precision import (
+    NUMBER_KINDS,
+    Number,
+    Precision,
+    as_number,
+    exact_fraction,
+    shown,
+    unit_length,
+)
 
 _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
 
@@ -105,17 +115,30 @@ def recording_keys() -> Iterator[list[tuple[str, tuple[str, ...]]]]:
 
 
 def number(value: Any, where: str, *, positive: bool = False, nonneg: bool = False) -> Number:
-    """Validate a finite scene number (and its sign); return it unchanged."""
-    if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise SceneError(where, f"must be a number, got {value!r}")
+    """Validate a finite scene number (and its sign) given as any kind of number
+    :func:`~cayley_heyoka.core.precision.as_number` takes; return it as an int, a float or
+    decimal text with the same exact value.
+
+    While :meth:`Scene.from_dict` parses a scene, each number is also noted with ``where``:
+    the scene then checks it in the run's precision, naming that field.
+    """
+    try:
+        value = as_number(value)
+    except TypeError:
+        raise SceneError(where, f"must be a number ({NUMBER_KINDS}), got {shown(value)}") from None
+    except ValueError as exc:
+        raise SceneError(where, f"must be a finite number: {exc}") from None
     try:
         f = exact_fraction(value)
     except (ValueError, OverflowError) as exc:  # text outside the grammar, inf or nan
         raise SceneError(where, f"must be a finite number: {exc}") from None
     if positive and f <= 0:
-        raise SceneError(where, f"must be > 0, got {value}")
+        raise SceneError(where, f"must be > 0, got {shown(value)}")
     if nonneg and f < 0:
-        raise SceneError(where, f"must be >= 0, got {value}")
+        raise SceneError(where, f"must be >= 0, got {shown(value)}")
+    noted = _NOTED.get()
+    if noted is not None:
+        noted.append((where, value))
     return value
 
 
@@ -126,6 +149,29 @@ def expression_text(value: Any, where: str) -> str:
     if not isinstance(value, str) or not value.strip():
         raise SceneError(where, f"must be a non-empty expression string, got {value!r}")
     return value
+
+
+#: The numbers :func:`number` validated while :meth:`Scene.from_dict` parses, with their fields.
+_NOTED: contextvars.ContextVar[list[tuple[str, Number]] | None] = contextvars.ContextVar(
+    "scene_numbers", default=None
+)
+
+
+@contextlib.contextmanager
+def checked_numbers(precision: Precision | None = None) -> Iterator[list[tuple[str, Number]]]:
+    """Note every number :func:`number` validates in the block, with its field; at the end of
+    the block hold each in ``precision`` (:meth:`~.precision.Precision.hold`: refused naming
+    its field). Without ``precision`` the caller holds the noted list itself (the scene's
+    precision is known only once its ``[integrator]`` table is read)."""
+    noted: list[tuple[str, Number]] = []
+    token = _NOTED.set(noted)
+    try:
+        yield noted
+    finally:
+        _NOTED.reset(token)
+    if precision is not None:
+        for where, value in noted:
+            precision.hold(value, where)
 
 
 def vector(value: Any, where: str, length: int) -> tuple[Number, ...]:
@@ -277,41 +323,90 @@ class OutputOptions:
         ------
         SceneError
             If two times are equal once rounded to ``precision`` (increasing as written is
-            not enough: 0.1 and 0.10000000000000000001 are one double).
+            not enough: 0.1 and 0.10000000000000000001 are one double), a time or the span
+            from the first to the last is beyond the precision's range.
         """
-        if self.times is not None:
-            grid = precision.array(self.times)
-        elif self._grid()[2] == 1:
-            grid = precision.array([self._grid()[0]])
-        else:
-            start, stop, count = self._grid()
-            a, b = precision.number(start), precision.number(stop)
-            n = precision.number(count - 1)
-            if precision.kind == "double":
-                # The same operations, element by element, as the loop below (k is exact):
-                # numpy does them in microseconds where the loop took ~3 µs a time. (An
-                # overflowing span gives NaN as the loop did, refused below without a warning.)
-                with np.errstate(all="ignore"):
-                    grid = a + (b - a) * np.arange(count, dtype=np.float64) / n
-            else:
-                grid = np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
-        wild = np.flatnonzero(~np.isfinite(grid))
-        if len(wild):
+        return _time_grid(self.times, self.grid, precision)
+
+
+@functools.lru_cache(maxsize=16)
+def _time_grid(
+    times: tuple[Number, ...] | None, spec: tuple[Number, Number, int] | None, precision: Precision
+) -> np.ndarray:
+    """:meth:`OutputOptions.time_grid`, computed once for the members of a sweep, which share
+    their base scene's output times (a quad grid of 1000 times costs ~3 ms)."""
+    if times is not None:
+        grid = precision.array(times)
+    else:
+        assert spec is not None, "output options with neither times nor a grid"
+        grid = _spaced(*spec, precision)
+    wild = np.flatnonzero(~np.isfinite(grid))
+    if len(wild):
+        raise SceneError(
+            "output.times",
+            f"time [{wild[0]}] is {grid[wild[0]]} in {precision.name}: the grid overflows",
+        )
+    with np.errstate(over="ignore"):
+        span = grid[-1] - grid[0]
+    if not np.isfinite(span):
+        # Quad and MPFR cannot get here (see above); heyoka measures a run by its span.
+        raise SceneError(
+            "output.times",
+            f"spans {float(grid[0])!r} to {float(grid[-1])!r}, a length beyond "
+            f"{precision.name}'s range (about 1.8e308): the integrator cannot measure it; "
+            "shorten the span or choose quad",
+        )
+    if len(grid) > 1:
+        same = np.flatnonzero(~(grid[1:] > grid[:-1]))
+        if len(same):
+            i = int(same[0])
             raise SceneError(
                 "output.times",
-                f"time [{wild[0]}] is {grid[wild[0]]} in {precision.name}: the grid overflows",
+                f"must be strictly increasing in {precision.name}: times [{i}] and "
+                f"[{i + 1}] are both {grid[i]} once rounded; space them further or raise "
+                "the precision",
             )
-        if len(grid) > 1:
-            same = np.flatnonzero(~(grid[1:] > grid[:-1]))
-            if len(same):
-                i = int(same[0])
-                raise SceneError(
-                    "output.times",
-                    f"must be strictly increasing in {precision.name}: times [{i}] and "
-                    f"[{i + 1}] are both {grid[i]} once rounded; space them further or raise "
-                    "the precision",
-                )
-        return grid
+    grid.flags.writeable = False  # shared by the scenes that have these times
+    return grid
+
+
+def _spaced(start: Number, stop: Number, count: int, precision: Precision) -> np.ndarray:
+    """``{start, stop, count}`` in ``precision``: ``a + (b - a) k / (count - 1)``."""
+    if count == 1:
+        return precision.array([start])
+    a, b = precision.number(start), precision.number(stop)
+    if precision.kind == "double":
+        return _double_grid(a, b, count)
+    # Quad and MPFR cannot overflow here: (b - a) k is below 2e4007 (scene numbers are within
+    # 1e±4000, counts within 1e7), far inside both ranges.
+    n = precision.number(count - 1)
+    return np.array([a + (b - a) * precision.number(k) / n for k in range(count)])
+
+
+def _double_grid(a: float, b: float, count: int) -> np.ndarray:
+    """``a + (b - a) k / (count - 1)`` in double, for k = 0 … count - 1, element by element
+    (numpy does it in microseconds where a loop took ~3 µs a time).
+
+    Where ``(b - a) k`` would overflow (``[-1e308, 1e308]``, or ``[0, 1e305]`` with 10⁵
+    times) the same operations are done on ``a`` and ``b`` scaled by a power of two and the
+    result scaled back: scaling by 2ᵐ is exact for normal numbers, so each time is the one the
+    formula gives in a double without an exponent limit (the first is ``a`` itself: a tiny
+    ``a`` scaled down would lose bits). Only a time that itself exceeds double's range
+    overflows, and is refused by the caller.
+    """
+    n = float(count - 1)
+    k = np.arange(count, dtype=np.float64)
+    if math.isfinite(b - a) and abs(b - a) * n < _DOUBLE_MAX / 4:
+        return a + (b - a) * k / n
+    shift = (count - 1).bit_length() + 3
+    sa, sb = math.ldexp(a, -shift), math.ldexp(b, -shift)
+    with np.errstate(over="ignore"):
+        grid = np.ldexp(sa + (sb - sa) * k / n, shift)
+    grid[0] = a
+    return grid
+
+
+_DOUBLE_MAX = float(np.finfo(float).max)
 
 
 def _parse_times(spec: Any) -> tuple[tuple[Number, ...] | None, tuple | None]:
@@ -433,7 +528,20 @@ class Scene:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Scene:
-        """Validate a scene given as nested dictionaries (the TOML document's shape)."""
+        """Validate a scene given as nested dictionaries (the TOML document's shape).
+
+        The one input path of every verb: each number, of any kind
+        :func:`~cayley_heyoka.core.precision.as_number` takes (text, int, float, numpy,
+        Fraction, Decimal, real128, real, mpf), is checked as a scene number and then held in
+        the run's precision (:meth:`~cayley_heyoka.core.precision.Precision.hold`), and the
+        output times are computed there (:attr:`time_grid`), before anything else uses them.
+
+        Raises
+        ------
+        SceneError
+            Naming the field at fault (``output.times.stop``, ``initial.rates[0]``) and the
+            rule, docs/scenes.md ("Numbers", "Limits").
+        """
         from .families import FAMILIES, family_of
 
         if not isinstance(data, Mapping):
@@ -445,18 +553,38 @@ class Scene:
         title = data.get("title", "")
         if not isinstance(title, str):
             raise SceneError("title", f"must be a string, got {title!r}")
-        integrator = IntegratorOptions.parse(data.get("integrator", {}))
-        output = OutputOptions.parse(data.get("output", {}), spec.output_keys)
-        events_table = data.get("events", {})
-        if not isinstance(events_table, Mapping):
-            raise SceneError("events", "must be a table of [events.NAME] tables")
-        events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
-        monitors = parse_monitors(data.get("monitors", {}))
-        model = spec.parse({k: data[k] for k in spec.tables if k in data})
+        with checked_numbers() as noted:
+            integrator = IntegratorOptions.parse(data.get("integrator", {}))
+            output = OutputOptions.parse(data.get("output", {}), spec.output_keys)
+            events_table = data.get("events", {})
+            if not isinstance(events_table, Mapping):
+                raise SceneError("events", "must be a table of [events.NAME] tables")
+            events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
+            monitors = parse_monitors(data.get("monitors", {}))
+            model = spec.parse({k: data[k] for k in spec.tables if k in data})
+        # Every number as written, in the run's precision, before any other use of it.
+        precision = integrator.precision
+        for where, value in noted:
+            precision.hold(value, where)
         scene = cls(family, model, integrator, output, events, title, plain_copy(data), monitors)
+        scene.time_grid  # noqa: B018 -- computed (and refused) here, kept for every user
         if spec.validate is not None:
             spec.validate(scene)
         return scene
+
+    @functools.cached_property
+    def time_grid(self) -> np.ndarray:
+        """The output times in the run's precision (read-only), checked
+        (:meth:`OutputOptions.time_grid`) when the scene is loaded; the engine, the progress
+        bars, references and checks all take this one."""
+        return self.output.time_grid(self.integrator.precision)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The checked grid is recomputed where the scene is unpickled (a sweep's worker), not
+        # shipped with it: 10⁷ output times are 80 MB in double.
+        state = dict(self.__dict__)
+        state.pop("time_grid", None)
+        return state
 
     def __repr__(self) -> str:
         """One line: the family, the title, the precision and tolerance, the output times."""
@@ -476,6 +604,64 @@ class Scene:
     def to_dict(self) -> dict[str, Any]:
         """The plain dictionary this scene was built from."""
         return plain_copy(self.source)
+
+
+def require_scene(scene: Any, name: str = "scene") -> Scene:
+    """``scene`` if it is a :class:`Scene`; the public functions that take one (``run``,
+    ``check_scene``, ``generate_reference``, ``propagate_ensemble``, ``plan``) call this
+    first.
+
+    A dictionary is not taken in its place: :meth:`Scene.from_dict` is the one way a scene
+    is checked (every number in its precision, its time grid), once, and the checked scene is
+    what results keep.
+
+    Raises
+    ------
+    TypeError
+        Naming ``name`` and how to build a scene.
+    """
+    if isinstance(scene, Scene):
+        return scene
+    how = (
+        "Scene.from_dict(d)"
+        if isinstance(scene, Mapping)
+        else "Scene.from_dict, Scene.from_toml or load_scene(path)"
+    )
+    raise TypeError(f"{name} must be a Scene (build it with {how}), got {type(scene).__name__}")
+
+
+def with_options(scene: Scene, options: Mapping[str, tuple[str, Any]]) -> Scene:
+    """``scene`` with fields set by options, through :meth:`Scene.from_dict` (the one input
+    path: the option's value is checked as the field's, in the run's precision).
+
+    Parameters
+    ----------
+    options
+        ``{field: (option, value)}``, e.g. ``{"integrator.tolerance": ("--tolerance", "1e-20")}``;
+        a field is a dotted path of tables.
+
+    Raises
+    ------
+    OptionError
+        When the scene refuses one of these fields (or a field inside it, such as
+        ``integrator.precision.bits``), named by its option.
+    SceneError
+        When the scene refuses another field (a precision the scene's numbers do not fit).
+    """
+    data = scene.to_dict()
+    for path, (_, value) in options.items():
+        node = data
+        *tables, key = path.split(".")
+        for table in tables:
+            node = node.setdefault(table, {})
+        node[key] = value
+    try:
+        return Scene.from_dict(data)
+    except SceneError as exc:
+        for path, (option, _) in options.items():
+            if exc.field == path or exc.field.startswith(path + "."):
+                raise OptionError(option, exc.constraint) from None
+        raise
 
 
 #: The longest unit text ``output.units`` takes (units are labels, not documents).
@@ -575,11 +761,17 @@ def parse_toml(text: str, what: str = "scene") -> dict[str, Any]:
 
 
 def plain_copy(data: Any) -> Any:
-    """Deep copy into JSON-friendly types (Fractions and numpy scalars become text)."""
+    """Deep copy into JSON-friendly types: a number of another kind (numpy, Fraction,
+    real128, mpmath) becomes the int, float or text with its exact value that the scene was
+    built from (:func:`~cayley_heyoka.core.precision.as_number`), so that the copy gives the
+    same scene again."""
     if isinstance(data, Mapping):
         return {str(k): plain_copy(v) for k, v in data.items()}
     if isinstance(data, list | tuple):
         return [plain_copy(v) for v in data]
-    if isinstance(data, Fraction | np.generic):
-        return str(data)
-    return data
+    if data is None or isinstance(data, bool | str | int | float):
+        return data
+    try:
+        return as_number(data)
+    except (TypeError, ValueError):
+        return str(data) if isinstance(data, Fraction | np.generic) else data

@@ -127,7 +127,7 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
         **extra,
         **kw,
     )
-    grid = scene.output.time_grid(prec)
+    grid = scene.time_grid
     ta.time = grid[0]
     rows = ta.propagate_grid(grid)[-1]
     size = 2 * n + 1

@@ -25,7 +25,7 @@ import mpmath
 
 from ..core.errors import SceneError
 from ..core.expressions import uses_time
-from ..core.precision import Number, exact_fraction, exceeds_pi
+from ..core.precision import Number, exact_fraction, exceeds_pi, scene_mpf
 from ..core.scene import check_keys, expression_text, number, vector
 from ..core.vectors import cross, dot
 from ..mechanics.kepler import ELEMENT_KEYS, Elements
@@ -252,8 +252,7 @@ class Body:
 
 
 def _mpf(value: Number) -> mpmath.mpf:
-    f = exact_fraction(value)
-    return mpmath.mpf(f.numerator) / f.denominator
+    return scene_mpf(value)
 
 
 def _bodies(value: Any, formulation: str) -> list[Body]:

@@ -98,7 +98,7 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
         if twin in ("cartesian", "encke"):
             data["orbit"].pop("sigma0", None)
         what = f"the {twin} formulation"
-    grid = own.output.time_grid(prec)
+    grid = own.time_grid
     # The sensitivity first: an orbit it cannot bound is refused before any run.
     s = _sensitivity(own, float(grid[-1] - grid[0]))
     a, b = run(own), run(Scene.from_dict(data))
@@ -142,7 +142,7 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     from .model import initial_cartesian
 
     orbit = scene.model
-    t0 = scene.output.time_grid(scene.integrator.precision)[0]
+    t0 = scene.time_grid[0]
     with mpmath.workdps(_SENSITIVITY_DPS):
         mu = scene_mpf(orbit.mu)
         x0, v0 = initial_cartesian(orbit, mpmath.mpf(str(t0)))

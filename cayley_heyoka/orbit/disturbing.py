@@ -39,7 +39,7 @@ from ..core import vectors
 from ..core.errors import SceneError
 from ..core.expressions import parse_expression, uses_time
 from ..core.model import ParTable
-from ..core.precision import Number, exact_fraction, exceeds_pi
+from ..core.precision import Number, exact_fraction, exceeds_pi, rational_mpf
 from ..core.scene import check_keys, expression_text, number, vector
 from ..mechanics import frames
 
@@ -69,9 +69,8 @@ class Context:
 
     def exact(self, value: Number) -> mpmath.mpf:
         """A scene number as an mpmath number, to ``dps`` digits."""
-        f = exact_fraction(value)
         with mpmath.workdps(self.dps):
-            return mpmath.mpf(f.numerator) / f.denominator
+            return rational_mpf(exact_fraction(value))
 
     @property
     def mu_value(self) -> Number:
@@ -299,7 +298,7 @@ class ThirdBody:
     def pericentre(self) -> mpmath.mpf:
         """a(1 − e) at the current mpmath precision (a float overflows past 1e308)."""
         q = exact_fraction(self.a) * (1 - exact_fraction(self.eccentricity))
-        return mpmath.mpf(q.numerator) / q.denominator
+        return rational_mpf(q)
 
     def axes(self, ctx: Context) -> tuple[list, list]:
         """P̂ (towards the pericentre) and Q̂ (90° ahead) of the perturber's orbit, in mpmath;

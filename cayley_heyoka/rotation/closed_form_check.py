@@ -81,7 +81,7 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
             # Each sample is a quadrature in mpmath (1000 take ~30 s); the nodes' default is
             # at most 308 (1024 bits).
             samples=options.integer("samples", maximum=10**4),
-            upsilon0=options.text("upsilon0"),
+            upsilon0=options.number("upsilon0", scene.integrator.precision),
             nodes=options.integer("nodes", maximum=400),
         )
     except ValueError as exc:  # SceneError included: e.g. a force function of t
@@ -375,6 +375,9 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     data.setdefault("attitude", {})["formulation"] = "quaternion"
     data["attitude"].pop("max_chart_angle", None)
     data["integrator"] = {"precision": "double"}
+    # Only the start is the twin's own (the span is given): times that are distinct in the
+    # scene's precision but not in double must not refuse the check.
+    data["output"] = {**data["output"], "times": [repr(float(scene.time_grid[0]))]}
     twin = Scene.from_dict(data)
     model = FAMILIES["rotation"].build(twin)
     prec = Precision("double")
@@ -386,7 +389,7 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
         pars=prec.array(model.pars.values[: model.integrator_parameters()]),
         compact_mode=True,
     )
-    t0 = float(twin.output.time_grid(prec)[0])
+    t0 = float(twin.time_grid[0])
     ta.time = t0
     grid = [t0 + span * k / _SENSITIVITY_TIMES for k in range(_SENSITIVITY_TIMES + 1)]
     states = ta.propagate_grid(grid)[-1]

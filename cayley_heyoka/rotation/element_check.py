@@ -19,9 +19,9 @@ import mpmath
 import numpy as np
 
 from ..core.consistency import CheckReport, CheckRow
-from ..core.errors import SceneError
+from ..core.errors import OptionError, SceneError
 from ..core.model import ParTable
-from ..core.precision import Precision
+from ..core.precision import Precision, number_argument
 from ..core.scene import Scene
 from ..core.vectors import dot
 from . import attitude as att
@@ -238,7 +238,7 @@ def check_element_equations(
     _validate_scene(scene)
     prec = scene.integrator.precision
     body = scene.model
-    grid = scene.output.time_grid(prec)
+    grid = scene.time_grid
     if len(grid) < 2:
         raise SceneError("output.times", "the check needs a time span: give at least two times")
     if nodes is None:
@@ -254,6 +254,11 @@ def check_element_equations(
     if upsilon0 is None:
         upsilon0 = _choose_upsilon0(inertia, rates_start, q_start, t_start, prec)
     else:
+        upsilon0 = number_argument(upsilon0, "upsilon0")
+        try:
+            prec.hold(upsilon0, "upsilon0")
+        except SceneError as exc:
+            raise OptionError("upsilon0", exc.constraint) from None
         # Refuse a bad υ₀ before the run, with the start state's range in the message.
         cayley_elements(
             inertia, rates_start, None, t_start, upsilon0, quaternion=q_start, precision=prec

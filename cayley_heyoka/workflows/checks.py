@@ -10,7 +10,7 @@ from ..core.consistency import CheckOptions, CheckReport
 from ..core.engine import preflight
 from ..core.errors import SceneError
 from ..core.families import FAMILIES
-from ..core.scene import Scene
+from ..core.scene import Scene, require_scene
 
 
 def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckReport:
@@ -29,16 +29,19 @@ def check_scene(scene: Scene, options: CheckOptions | None = None) -> CheckRepor
 
     Raises
     ------
+    TypeError
+        When ``scene`` is not a :class:`~cayley_heyoka.core.scene.Scene`.
     SceneError
         When the scene's family has no check, or an option is unknown or malformed.
     ValueError
         When the check cannot be carried through, naming the reason.
     """
 
+    scene = require_scene(scene)
     check = FAMILIES[scene.family].consistency_check
     if check is None:
         raise SceneError("scene", f"no consistency check for the {scene.family} family")
-    if len(scene.output.time_grid(scene.integrator.precision)) < 2:
+    if len(scene.time_grid) < 2:
         raise SceneError("output.times", "a check needs a time span: give at least two times")
     preflight(scene)  # some checks integrate their own way: refuse what a run would
     return check(scene, options or CheckOptions())

@@ -60,10 +60,11 @@ import heyoka as hy
 import numpy as np
 
 from ..core import compiler, lanes
+from ..core.errors import OptionError, SceneError
 from ..core.families import FAMILIES
 from ..core.model import Model
-from ..core.precision import Number, Precision
-from ..core.scene import IntegratorOptions, Scene
+from ..core.precision import Number, Precision, number_argument
+from ..core.scene import IntegratorOptions, Scene, require_scene
 
 MODES = ("batch", "threads", "serial")
 
@@ -172,7 +173,8 @@ def propagate_ensemble(
         :func:`ensemble_state`'s names. Finite numbers; converted to the scene's precision
         (pass decimal text for exact quad or multiprecision values).
     t_end
-        The common end time (a number, or decimal text for exactness beyond double).
+        The common end time: any number :func:`~cayley_heyoka.core.precision.as_number`
+        takes (decimal text for exactness beyond double), held by the scene's precision.
     mode
         ``"batch"`` (SIMD batch integrators, double only), ``"threads"`` (scalar integrators
         on worker threads) or ``"serial"`` (the calling thread).
@@ -187,6 +189,8 @@ def propagate_ensemble(
 
     Raises
     ------
+    TypeError
+        ``scene`` is not a Scene, or ``t_end`` is not a number.
     ValueError
         A scene the ensemble cannot run (terminal events, recorded events, batch mode beyond
         double precision), a bad mode or worker count, initial states of the wrong shape or
@@ -195,6 +199,7 @@ def propagate_ensemble(
         A member's state became non-finite (or it stopped before ``t_end``): the first such
         member is named.
     """
+    scene = require_scene(scene)
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
     if workers is not None and (
@@ -226,10 +231,11 @@ def propagate_ensemble(
         )
     names = tuple(model.state_names)
     states = _initial_states(initial_states, names, prec)
-    end = prec.number(t_end)
-    if not np.isfinite(np.array([end]))[0]:
-        raise ValueError(f"t_end must be finite, got {t_end!r}")
-    start = scene.output.time_grid(prec)[0]
+    try:
+        end = prec.hold(number_argument(t_end, "t_end"), "t_end")
+    except SceneError as exc:
+        raise OptionError("t_end", exc.constraint) from None
+    start = scene.time_grid[0]
     workers = 1 if mode == "serial" else (workers or os.cpu_count() or 1)
 
     if mode == "batch":
@@ -282,16 +288,29 @@ def clear_cache() -> None:
 def _initial_states(values: Any, names: Sequence[str], prec: Precision) -> np.ndarray:
     """The members as a ``(members, n)`` array in the scene's precision, or a clear refusal."""
     n = len(names)
-    if prec.kind == "double":
-        try:
-            array = np.array(values, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"initial_states must be an array of numbers: {exc}") from None
+    try:
+        raw = np.asarray(values)
+        if raw.dtype.kind not in "fiu" or prec.kind != "double":
+            raw = np.array(values, dtype=object)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"initial_states must be an array of numbers: {exc}") from None
+    if raw.dtype.kind in "fiu":
+        array = raw.astype(float)  # a numeric array in double: as it is, at numpy's speed
+    elif raw.ndim != 2:
+        array = raw
     else:
-        raw = np.array(values, dtype=object)
-        array = np.array([prec.number(v) for v in raw.ravel()], dtype=prec.fp_type).reshape(
-            raw.shape
-        )
+        # Any other input, number by number through the one entry of numbers (10**400, a
+        # real128, a Fraction), in the scene's precision.
+        array = np.array(
+            [
+                prec.hold(
+                    number_argument(v, f"initial_states[{i}, {j}]"), f"initial_states[{i}, {j}]"
+                )
+                for i, row in enumerate(raw)
+                for j, v in enumerate(row)
+            ],
+            dtype=float if prec.kind == "double" else prec.fp_type,
+        ).reshape(raw.shape)
     if array.ndim != 2 or array.shape[1] != n or array.shape[0] == 0:
         raise ValueError(
             f"initial_states must have shape (members, {n}), one row per member with the "

@@ -258,7 +258,7 @@ def _lanes_group(
     part.compile_seconds += (0 if cached else compiled.compile_seconds) + (
         0 if batch_cached else batch.compile_seconds
     )
-    grid = scene0.output.time_grid(prec)
+    grid = scene0.time_grid
     initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
     pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
     try:
@@ -319,7 +319,7 @@ def _ensemble_group(
     compiled, cached = compiler.compile_model(model0, scene0.integrator)
     if not cached:
         part.compile_seconds += compiled.compile_seconds
-    grid = scene0.output.time_grid(prec)
+    grid = scene0.time_grid
     held = len(compiled.integrator.pars)
     starts = [prec.array(model.initial_state) for _, _, model in group]
     pars = [prec.array(model.pars.values) for _, _, model in group]

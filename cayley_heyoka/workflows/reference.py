@@ -61,10 +61,11 @@ from ..core.certificate import (
     precision_for,
 )
 from ..core.closed_form import ClosedForm, with_precision
+from ..core.errors import OptionError, SceneError
 from ..core.families import FAMILIES
 from ..core.files import OutputError, check_destination, write_hdf5
-from ..core.precision import Precision
-from ..core.scene import Scene
+from ..core.precision import Precision, number_argument
+from ..core.scene import Scene, require_scene
 
 #: Digits of working precision beyond those requested: room for the error a long run builds.
 GUARD_DIGITS = 4
@@ -98,7 +99,7 @@ def generate_reference(
     out: str | Path,
     *,
     precision: Precision | None = None,
-    tolerance: str | None = None,
+    tolerance: Any = None,
     max_bits: int = MAX_BITS,
     stretches: int = STRETCHES,
     workdir: str | Path | None = None,
@@ -124,10 +125,13 @@ def generate_reference(
         Start from this precision instead of the one chosen for ``digits`` (the closed form:
         write in it).
     tolerance
-        heyoka's tolerance for the first run (decimal text); default: its precision's epsilon.
-        Asks for an integration: with ``method="auto"`` the closed form is not taken.
+        heyoka's tolerance for the first run (any number
+        :func:`~cayley_heyoka.core.precision.as_number` takes; decimal text keeps it exact);
+        default: its precision's epsilon. Asks for an integration: with ``method="auto"`` the
+        closed form is not taken.
     max_bits
-        Give up raising the precision beyond this many bits.
+        Give up raising the precision beyond this many bits (at most :data:`MAX_BITS`, the
+        largest precision of a scene).
     stretches
         Checkpoints per run (see :class:`~cayley_heyoka.workflows.checkpoint.CheckpointedRun`).
     workdir
@@ -161,6 +165,13 @@ def generate_reference(
 
     Raises
     ------
+    TypeError
+        ``scene`` is not a :class:`~cayley_heyoka.core.scene.Scene`, or ``tolerance`` is not a
+        number.
+    ValueError
+        A bad argument, named (:class:`~cayley_heyoka.core.errors.OptionError` for a
+        ``precision`` or ``tolerance`` the scene refuses, such as a tolerance below 1e-6 of
+        the precision's epsilon).
     OutputError
         Before anything is integrated: ``out`` may not be written, or ``workdir`` exists and
         is not a work directory of this function.
@@ -168,12 +179,22 @@ def generate_reference(
         The closed form could not certify its own digits at some time (next to a singular
         configuration), or an integration stopped.
     """
+    scene = require_scene(scene)
     if isinstance(digits, bool) or not isinstance(digits, int) or digits < 1:
         raise ValueError(f"digits must be an integer >= 1, got {digits!r}")
-    if max_bits < 53:
-        raise ValueError(f"max_bits must be >= 53, got {max_bits}")
-    if tolerance is not None and not _positive(tolerance):
-        raise ValueError(f"tolerance must be a number > 0, got {tolerance!r}")
+    if (
+        isinstance(max_bits, bool)
+        or not isinstance(max_bits, int)
+        or not 53 <= max_bits <= MAX_BITS
+    ):
+        raise ValueError(
+            f"max_bits must be an integer in 53 … {MAX_BITS} (the largest precision of a "
+            f"scene), got {max_bits!r}"
+        )
+    if precision is not None and not isinstance(precision, Precision):
+        raise TypeError(f"precision must be a Precision or None, got {precision!r}")
+    if tolerance is not None:
+        tolerance = number_argument(tolerance, "tolerance", positive=True)
     from .checkpoint import check_count
 
     check_count(stretches)
@@ -196,6 +217,20 @@ def generate_reference(
     first = precision or precision_for(digits + GUARD_DIGITS)
     if first.bits > max_bits:
         raise ValueError(f"max_bits ({max_bits}) is below the precision needed ({label(first)})")
+    # The first run's scene, checked as the scene's own fields are (the tolerance against the
+    # precision's epsilon, every number in the precision) before anything is written.
+    try:
+        with_precision(scene, first, tolerance)
+    except OptionError:
+        raise
+    except SceneError as exc:
+        if precision is not None:
+            raise
+        raise SceneError(
+            exc.field,
+            f"{exc.constraint} (in {label(first)}, the precision chosen for {digits} digits: "
+            "give a precision that holds the scene)",
+        ) from None
     evaluated = None
     if closed is not None and (method == "closed-form" or (method == "auto" and not tolerance)):
         evaluated = closed.job(first)
@@ -359,13 +394,6 @@ def _closed_form_reference(
 
 # ---------------------------------------------------------------------- certificates
 # ---------------------------------------------------------------------- files
-def _positive(text: str) -> bool:
-    try:
-        return float(text) > 0
-    except (TypeError, ValueError):
-        return False
-
-
 def _labelled(progress: Any, label: str) -> Any:
     if progress is None:
         return None

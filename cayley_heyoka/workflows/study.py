@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import SceneError
-from ..core.precision import Number, Precision, exact_fraction, fraction_text
-from ..core.scene import Scene, check_keys, number, plain_copy, read_toml
+from ..core.precision import Number, Precision, exact_fraction, fraction_text, scene_mpf, shown
+from ..core.scene import Scene, check_keys, checked_numbers, number, plain_copy, read_toml
 
 KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")
@@ -194,9 +194,12 @@ class Study:
                 'must be a table of swept numbers, e.g. "initial.rates[0]" = ...',
             )
         precision = Scene.from_dict(scene).integrator.precision
-        parameters = tuple(
-            _parameter(name, spec, kind, scene, precision) for name, spec in table.items()
-        )
+        # The values as written, in the members' precision: refused by the parameter's name
+        # here rather than by the member's field once the sweep runs.
+        with checked_numbers(precision):
+            parameters = tuple(
+                _parameter(name, spec, kind, scene, precision) for name, spec in table.items()
+            )
         if kind == "grid" and (size := math.prod(len(p.values) for p in parameters)) > MAX_MEMBERS:
             raise SceneError(
                 "sweep.parameters",
@@ -480,10 +483,16 @@ def _show_path(path: Sequence[str | int]) -> str:
 
 
 def show_number(value: Any) -> str:
+    """A member's value, short: long text to 15 digits (in mpmath: 1e400 has no float)."""
     if isinstance(value, float):
         return f"{value:.6g}"
-    text = str(value)
-    return text if len(text) <= 20 else f"{float(exact_fraction(text)):.15g}"
+    text = str(value) if not isinstance(value, int) or abs(value) < 10**20 else shown(value)
+    if len(text) <= 20:
+        return text
+    import mpmath
+
+    with mpmath.workdps(20):
+        return mpmath.nstr(scene_mpf(value), 15)
 
 
 def _run_table(run: RunOptions) -> dict[str, Any]:

@@ -55,7 +55,7 @@ def layout_of(study: Study) -> Layout:
     model = FAMILIES[scene.family].build(scene)
     check_units(scene, [*model.outputs, *model.monitors])
     events = tuple(dict.fromkeys(e.name for e in model.events))
-    grid = scene.output.time_grid(scene.integrator.precision)
+    grid = scene.time_grid
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
 
 
@@ -128,10 +128,16 @@ def run_sweep(
 
     Raises
     ------
+    TypeError
+        ``study`` is not a :class:`~cayley_heyoka.workflows.study.Study`.
     SceneError
         A member whose scene is invalid (naming the member, its values and the field), or bad
         run options; raised before anything is integrated.
     """
+    if not isinstance(study, Study):
+        # The same rule as run(scene): a validated object, never a dictionary parsed here.
+        how = "Study.from_dict(d)" if isinstance(study, dict) else "load_study(path)"
+        raise TypeError(f"study must be a Study (build it with {how}), got {type(study).__name__}")
     run = override_run(study.run, backend, scheduler, workers, chunk)
     members = study.members()
     # Every member is validated before anything runs; the scenes are kept for the local

@@ -418,7 +418,7 @@ def nan_final(n: int, width: int, prec: Precision) -> np.ndarray:
 def empty_result(study: Study, members: list, layout: Layout, prec: Precision) -> SweepResult:
     n = len(members)
     columns = list(zip(*members, strict=True)) if members else [[] for _ in study.parameters]
-    grid = Scene.from_dict(study.scene).output.time_grid(prec)
+    grid = Scene.from_dict(study.scene).time_grid  # in the base scene's precision, prec
     return SweepResult(
         t=grid,
         parameters={

@@ -23,7 +23,7 @@ import mpmath
 import numpy as np
 
 from ...core.consistency import CheckReport, CheckRow
-from ...core.precision import exact_fraction
+from ...core.precision import scene_mpf
 from ...core.scene import Scene
 from . import system as planets
 
@@ -114,5 +114,4 @@ def _orbit_scales(scene: Scene) -> dict[str, float]:
 
 
 def _mpf(value: Any) -> mpmath.mpf:
-    f = exact_fraction(value)
-    return mpmath.mpf(f.numerator) / f.denominator
+    return scene_mpf(value)
