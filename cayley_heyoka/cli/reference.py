@@ -90,7 +90,7 @@ def command(args: argparse.Namespace) -> int:
 
 def _reference(args: argparse.Namespace) -> int:
     from ..core.errors import SceneError
-    from ..core.files import WriteFailed
+    from ..core.files import WriteFailed, file_id
     from ..core.scene import load_scene
     from ..workflows.reference import generate_reference, label
 
@@ -101,6 +101,7 @@ def _reference(args: argparse.Namespace) -> int:
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
     bar = _Bars(scene) if show_progress(args) else None
+    before = file_id(args.out)
     try:
         outcome = generate_reference(
             scene,
@@ -119,11 +120,14 @@ def _reference(args: argparse.Namespace) -> int:
             command=["cayley-heyoka", *sys.argv[1:]],
         )
     except KeyboardInterrupt:
-        print(
-            f"\ninterrupted: what was checkpointed is in {args.out}.work; "
-            "run the same command to continue",
-            file=sys.stderr,
-        )
+        if file_id(args.out) not in (None, before):  # it came while the file was written
+            print(f"\ninterrupted after the reference was written to {args.out}", file=sys.stderr)
+        else:
+            print(
+                f"\ninterrupted: what was checkpointed is in {args.out}.work; "
+                "run the same command to continue",
+                file=sys.stderr,
+            )
         return 130
     except SceneError as exc:  # found when the model is built or its output times rounded
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
