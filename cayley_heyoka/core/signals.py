@@ -185,5 +185,5 @@ def held_signals() -> Iterator[None]:
         raise
     for sig, handler in old.items():
         signal.signal(sig, handler)
-    for sig in noted:
-        signal.raise_signal(sig)
+    for signum in noted:
+        signal.raise_signal(signum)

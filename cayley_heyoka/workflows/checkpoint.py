@@ -175,8 +175,12 @@ class CheckpointedRun:
         for path in self.workdir.iterdir():
             if _LEGACY.fullmatch(path.name) and path.is_file():
                 self._drop(path, "written by an older version of cayley_heyoka")
-        self._check_manifest()
+        # Everything is verified before anything is written: a directory of another run is
+        # refused as it was found.
+        manifest = self._check_manifest()
         snapshot, records = self._verified_state()
+        if manifest:
+            self._write(MANIFEST, "manifest", manifest)
         done = len(records)
         # A stretch written after the last snapshot (killed between the two renames) is
         # recomputed: only what a snapshot vouches for is kept.
@@ -187,18 +191,17 @@ class CheckpointedRun:
             (self.workdir / SNAPSHOT).unlink(missing_ok=True)
         return snapshot, records
 
-    def _check_manifest(self) -> None:
-        path = self.workdir / MANIFEST
-        mine = self.manifest()
+    def _check_manifest(self) -> bytes:
+        """The manifest to write ('' if the one there is this run's)."""
         try:
-            read_checkpoint(path, "manifest", self._identity)
-            return
+            read_checkpoint(self.workdir / MANIFEST, "manifest", self._identity)
+            return b""
         except CheckpointError as exc:
             if exc.reason == "foreign":
                 raise self._mismatch(exc) from None
             if exc.reason == "damaged":
                 self.notes.append(f"{exc}; written again")
-        self._write(MANIFEST, "manifest", json.dumps(mine, indent=1).encode())
+        return json.dumps(self.manifest(), indent=1).encode()
 
     def _verified_state(self) -> tuple[dict[str, Any] | None, list[dict[str, Any]]]:
         try:

@@ -30,7 +30,9 @@ absolute where |x| ≤ 1, relative above), the precision is raised and the work 
 
 Integrations go through :class:`~cayley_heyoka.workflows.checkpoint.CheckpointedRun` in a work
 directory beside the output (``REF.h5.work``): an interrupted command, run again, continues
-where it stopped and writes the same bits as an uninterrupted one. Once the file is written,
+where it stopped and writes the same bits as an uninterrupted one (every checkpoint verified by
+its checksum and the run's identity first). The running command holds the directory locked
+(:data:`WORK_LOCK`): a second one on the same output is refused. Once the file is written,
 the files the runs wrote there are removed (and the directory, if nothing else is in it); a
 ``OUT.work`` that this command did not make (it carries the marker file :data:`WORK_MARKER`)
 is refused, not touched. The closed-form route needs no work directory: it writes the file
