@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import cayley_heyoka as ch
+from cayley_heyoka.core.files import identity_of, read_checkpoint
 from cayley_heyoka.workflows.checkpoint import CheckpointedRun, CheckpointMismatch
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -66,10 +67,13 @@ def test_resumed_run_ends_with_the_bits_of_an_uninterrupted_one(tmp_path, scene,
     whole = CheckpointedRun(sc, tmp_path / "a", 9).run()
     with pytest.raises(Interrupted):
         CheckpointedRun(sc, tmp_path / "b", 9).run(interrupt_after(3))
-    assert CheckpointedRun(sc, tmp_path / "b", 9).completed() == 3
+    again = CheckpointedRun(sc, tmp_path / "b", 9)
     with pytest.raises(Interrupted):  # twice, the second time from a resumed run
-        CheckpointedRun(sc, tmp_path / "b", 9).run(interrupt_after(6))
-    resumed = CheckpointedRun(sc, tmp_path / "b", 9).run()
+        again.run(interrupt_after(6))
+    assert again.resumed == 3 and not again.notes
+    last = CheckpointedRun(sc, tmp_path / "b", 9)
+    resumed = last.run()
+    assert last.resumed == 6
     assert whole.success and resumed.success
     assert len(whole.t) == len(sc.output.time_grid(sc.integrator.precision))
     assert_same_bits(whole, resumed)
@@ -88,7 +92,7 @@ def test_stretch_written_after_the_last_snapshot_is_recomputed(tmp_path):
     with pytest.raises(Interrupted):
         CheckpointedRun(sc, tmp_path / "b", 5).run(interrupt_after(2))
     # A stray stretch 3 (garbage): it must be discarded, not read.
-    (tmp_path / "b" / "segment-000003.npz").write_bytes(b"not a segment")
+    (tmp_path / "b" / "segment-000003.ckpt").write_bytes(b"not a segment")
     assert_same_bits(whole, CheckpointedRun(sc, tmp_path / "b", 5).run())
 
 
@@ -102,7 +106,9 @@ def test_work_directory_of_another_run_is_refused(tmp_path):
     other["hamiltonian"]["g"] = "2.0"
     with pytest.raises(CheckpointMismatch, match="scene differ"):
         CheckpointedRun(ch.Scene.from_dict(other), tmp_path, 4).run()
-    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    job = CheckpointedRun(sc, tmp_path, 4)
+    _, body = read_checkpoint(tmp_path / "manifest.ckpt", "manifest", identity_of(job.manifest()))
+    manifest = json.loads(body)
     assert manifest["stretches"] == 4 and manifest["versions"]["heyoka"]
 
 

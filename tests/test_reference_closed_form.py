@@ -8,7 +8,6 @@ clean Ctrl-C that resumes to the same bits.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import signal
@@ -263,7 +262,7 @@ def test_ctrl_c_ends_workers_and_the_same_command_resumes_to_the_same_bits(tmp_p
     deadline, workers = time.monotonic() + 120, []
     while time.monotonic() < deadline and proc.poll() is None:
         workers = _children(proc.pid)
-        if store.is_dir() and len(list(store.glob("chunk-*.json"))) >= 2:
+        if store.is_dir() and len(list(store.glob("chunk-*.ckpt"))) >= 2:
             break
         time.sleep(0.01)
     else:
@@ -277,8 +276,8 @@ def test_ctrl_c_ends_workers_and_the_same_command_resumes_to_the_same_bits(tmp_p
     while any(_alive(p) for p in workers) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not any(_alive(p) for p in workers)
-    saved = len(list(store.glob("chunk-*.json")))
-    assert 2 <= saved < 64 and json.loads((store / "job.json").read_text())["identity"]
+    saved = len(list(store.glob("chunk-*.ckpt")))
+    assert 2 <= saved < 64
 
     done = subprocess.run(command, env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr

@@ -178,8 +178,12 @@ def _command(scene: Path, out: Path) -> list[str]:
 
 
 def _stretch(work: Path) -> int:
-    snapshot = work / "snapshot.json"
-    return json.loads(snapshot.read_text())["stretch"] if snapshot.exists() else 0
+    """The stretch of the snapshot in ``work`` (its header says it), 0 if none yet."""
+    try:
+        header = (work / "snapshot.ckpt").read_bytes().split(b"\n")[1].split(b" ", 1)[1]
+    except (FileNotFoundError, IndexError):
+        return 0
+    return json.loads(header)["stretch"]
 
 
 def _wait_for_stretch(work: Path, proc: subprocess.Popen, at_least: int) -> None:

@@ -30,7 +30,7 @@ from cayley_heyoka.core.files import (
     check_destination,
     identify,
     seal,
-    write_atomically,
+    write_bytes,
 )
 from cayley_heyoka.workflows.reference import WORK_MARKER, generate_reference, read_certificate
 from cayley_heyoka.workflows.sweep_result import load_sweep
@@ -232,19 +232,27 @@ def test_symlinks_are_followed_to_their_target(tmp_path, result):
 
 
 # ---------------------------------------------------------------------- atomic writes
-def test_a_failed_write_leaves_the_previous_file_and_no_temporary(tmp_path, result):
+def test_a_failed_write_leaves_the_previous_file_and_no_temporary(tmp_path, result, monkeypatch):
+    from cayley_heyoka.core import files
+
     path = tmp_path / "r.h5"
     result.save(path)
     before = path.read_bytes()
+    real = os.write
 
-    def full_disk(tmp: Path) -> None:
-        tmp.write_bytes(b"half a file")
+    def full_disk(fd: int, data: bytes) -> int:
+        if len(data) > 100:
+            return real(fd, bytes(data[:100]))  # half a file, then no room
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
+    monkeypatch.setattr(files.os, "write", full_disk)
     with pytest.raises(OutputError, match="No space left on device"):
-        write_atomically(path, full_disk)
+        write_bytes(path, b"x" * 1000)
+    with pytest.raises(OutputError, match="No space left on device"):
+        result.save(path)
+    monkeypatch.setattr(files.os, "write", lambda fd, data: _raise(KeyboardInterrupt()))
     with pytest.raises(KeyboardInterrupt):
-        write_atomically(path, lambda tmp: (tmp.write_bytes(b"x"), _raise(KeyboardInterrupt())))
+        write_bytes(path, b"x")
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.h5"]
 
@@ -292,22 +300,24 @@ def test_temporaries_of_dead_processes_are_removed(tmp_path, result):
     assert not stale.exists() and live.exists()
 
 
-# A child that starts a save, says so once the new file is half written, and waits.
+# A child that starts a save, says so once the new file is written but not yet in place,
+# and waits.
 _SLOW_SAVE = textwrap.dedent(
     """
-    import sys, time
+    import os, sys, time
     from cayley_heyoka import load_result
-    from cayley_heyoka.core.files import write_hdf5
+    from cayley_heyoka.core import files
 
     res = load_result(sys.argv[1])
+    real = os.fsync
 
-    def fill(f):
-        res.fill(f)
-        f.flush()
+    def slow_fsync(fd):
+        real(fd)
         print("writing", flush=True)
         time.sleep(60)
 
-    write_hdf5(sys.argv[2], fill)
+    files.os.fsync = slow_fsync
+    res.save(sys.argv[2])
     """
 )
 
@@ -330,15 +340,14 @@ def test_sigkill_during_a_save_keeps_the_previous_file(tmp_path, result, quad_re
         child.wait(timeout=30)
     assert child.returncode == -signal.SIGKILL
     assert same(Result.load(path), result)  # the previous file, whole
-    with pytest.raises(ResultFileError, match="not completely written"):
-        Result.load(tmp)  # the killed save's temporary is never taken for a result
+    assert tmp.read_bytes()[:4] == b"\x89HDF"  # the killed save's temporary, left whole
     quad_result.save(path)  # the next save cleans up after the killed one
     assert same(Result.load(path), quad_result)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.h5", "source.h5"]
 
 
 def test_sweep_whose_file_cannot_be_written_keeps_the_previous_one(tmp_path, capsys, monkeypatch):
-    from cayley_heyoka.workflows import sweep_result
+    from cayley_heyoka.core import files
 
     (tmp_path / "body.toml").write_text(
         "[body]\ninertia = [1, 1.5, 2.5]\n[initial]\nrates = [1, 0.1, 0.2]\n"
@@ -351,18 +360,16 @@ def test_sweep_whose_file_cannot_be_written_keeps_the_previous_one(tmp_path, cap
     )
     out = tmp_path / "sweep.h5"
     out.write_bytes((DATA / "sweep_v1.h5").read_bytes())
-    calls = []
 
-    def full_disk_on_the_second_chunk(self, part, prec):
-        calls.append(len(part.index))
-        if len(calls) == 2:
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    def full_disk(fd: int, data: bytes) -> int:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(sweep_result.Writer, "_write", full_disk_on_the_second_chunk)
+    monkeypatch.setattr(files.os, "write", full_disk)
     argv = ["sweep", str(tmp_path / "study.toml"), "--out", str(out), "--chunk", "2"]
     assert main([*argv, "--no-progress"]) == 1
-    assert "No space left on device); nothing changed" in capsys.readouterr().err
-    assert calls == [2, 2]
+    captured = capsys.readouterr()
+    assert "No space left on device); nothing changed" in captured.err
+    assert "4 completed" in captured.out  # what was computed is shown
     assert out.read_bytes() == (DATA / "sweep_v1.h5").read_bytes()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["body.toml", "study.toml", "sweep.h5"]
 

@@ -39,6 +39,7 @@ def _check(args: argparse.Namespace) -> int:
     from ..core.errors import IntegrationError
     from ..core.files import OutputError
     from ..core.scene import load_scene
+    from ..core.signals import held_signals
     from ..workflows.checks import check_scene
 
     if not destination(args, "check"):
@@ -51,13 +52,16 @@ def _check(args: argparse.Namespace) -> int:
     except IntegrationError as exc:  # a run the check needs stopped early
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 1
-    if args.out:
-        try:
-            report.save(args.out)
-        except OutputError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 1
-    print(report.text())
-    if args.out:
-        print(f"check written to {args.out}")
-    return 0 if report.passed else 1
+    # The check is done: a signal from here on takes effect once it is saved and shown.
+    with held_signals():
+        if args.out:
+            try:
+                report.save(args.out)
+            except OutputError as exc:
+                print(report.text())
+                print(f"error: {exc}", file=sys.stderr)
+                return 1
+        print(report.text())
+        if args.out:
+            print(f"check written to {args.out}")
+        return 0 if report.passed else 1

@@ -38,7 +38,7 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    from ..core.files import OutputError, ResultFileError, check_destination
+    from ..core.files import OutputError, ResultFileError, WriteFailed, check_destination
     from ..workflows.plots import PlotError, plot_file
 
     path = Path(args.file)
@@ -49,6 +49,9 @@ def command(args: argparse.Namespace) -> int:
     except PlotError as exc:
         print(f"error: {args.file}: {exc}", file=sys.stderr)
         return 2
+    except WriteFailed as exc:  # drawn, but the figure could not be written (a full disk)
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     except (ImportError, OSError, OutputError, ResultFileError) as exc:  # says which file
         print(f"error: {exc}", file=sys.stderr)
         return 2

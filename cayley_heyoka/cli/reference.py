@@ -90,7 +90,7 @@ def command(args: argparse.Namespace) -> int:
 
 def _reference(args: argparse.Namespace) -> int:
     from ..core.errors import OptionError, SceneError
-    from ..core.files import WriteFailed
+    from ..core.files import WriteFailed, file_id
     from ..core.scene import load_scene
     from ..workflows.reference import generate_reference, label
 
@@ -105,6 +105,7 @@ def _reference(args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     bar = _Bars(scene) if show_progress(args) else None
+    before = file_id(args.out)
     try:
         try:
             outcome = generate_reference(
@@ -127,11 +128,14 @@ def _reference(args: argparse.Namespace) -> int:
             if bar:  # before any message: a bar drawn after it would end stderr
                 bar.close()
     except KeyboardInterrupt:
-        print(
-            f"\ninterrupted: what was checkpointed is in {args.out}.work; "
-            "run the same command to continue",
-            file=sys.stderr,
-        )
+        if file_id(args.out) not in (None, before):  # it came while the file was written
+            print(f"\ninterrupted after the reference was written to {args.out}", file=sys.stderr)
+        else:
+            print(
+                f"\ninterrupted: what was checkpointed is in {args.out}.work; "
+                "run the same command to continue",
+                file=sys.stderr,
+            )
         return 130
     except OptionError as exc:  # an option the scene refuses: named as the command line has it
         print(f"error: {_option(exc)}", file=sys.stderr)

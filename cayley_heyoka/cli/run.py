@@ -30,6 +30,7 @@ def _run(args: argparse.Namespace) -> int:
     from ..core.errors import IntegrationError, Interrupted, SceneError
     from ..core.files import OutputError
     from ..core.scene import load_scene
+    from ..core.signals import held_signals
     from .show import summary, time_bar
 
     if not destination(args, "result"):
@@ -50,24 +51,27 @@ def _run(args: argparse.Namespace) -> int:
         finally:
             if bar:  # before any message: a bar drawn after it would end stderr
                 bar.close()
-        code = 0
+        code, why = 0, None
     except Interrupted as exc:
-        result, code = exc.result, 130
-        print(f"\n{exc}", file=sys.stderr)
+        result, code, why = exc.result, 130, f"\n{exc}"
     except IntegrationError as exc:
-        result, code = exc.result, 1
-        print(f"error: {exc}", file=sys.stderr)
+        result, code, why = exc.result, 1, f"error: {exc}"
     except SceneError as exc:  # found when the model is built (expressions, event names)
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
-    if args.out:
-        try:
-            result.save(args.out)
-        except OutputError as exc:
-            print(summary(result))
-            print(f"error: {exc}", file=sys.stderr)
-            return 1
-    print(summary(result))
-    if args.out:
-        print(f"result written to {args.out}")
-    return code
+    # The run is over: a signal from here on (a second Ctrl-C) takes effect once its result
+    # is saved and reported.
+    with held_signals():
+        if why:
+            print(why, file=sys.stderr)
+        if args.out:
+            try:
+                result.save(args.out)
+            except OutputError as exc:
+                print(summary(result))
+                print(f"error: {exc}", file=sys.stderr)
+                return 1
+        print(summary(result))
+        if args.out:
+            print(f"result written to {args.out}")
+        return code

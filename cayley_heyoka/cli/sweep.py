@@ -31,7 +31,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--backend", choices=BACKENDS, help="override [run] backend")
     p.add_argument("--scheduler", help="a Dask scheduler's address (implies --backend dask)")
     p.add_argument("--workers", type=int, help="threads (local) or LocalCluster processes")
-    p.add_argument("--chunk", type=int, help="members per task (Dask) or per write (local)")
+    p.add_argument("--chunk", type=int, help="members per task (Dask) or per batch (local)")
     add_progress(p)
     p.set_defaults(handler=command)
 
@@ -44,7 +44,7 @@ def command(args: argparse.Namespace) -> int:
 
 def _sweep(args: argparse.Namespace) -> int:
     from ..core.errors import SceneError
-    from ..core.files import OutputError, check_destination
+    from ..core.files import OutputError, check_destination, file_id
     from ..workflows.study import load_study
 
     try:
@@ -65,6 +65,7 @@ def _sweep(args: argparse.Namespace) -> int:
         from tqdm import tqdm
 
         bar = tqdm(total=study.size, unit="member", file=sys.stderr, dynamic_ncols=True)
+    before = file_id(args.out) if args.out else None
     try:
         try:
             result = run_sweep(
@@ -83,8 +84,15 @@ def _sweep(args: argparse.Namespace) -> int:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
     except OutputError as exc:  # the file could not be written: the previous one stays
+        if getattr(exc, "result", None) is not None:  # computed, and shown, not saved
+            print(exc.result.summary())
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        if args.out and file_id(args.out) not in (None, before):  # written as it stopped
+            print(f"\ninterrupted: what was computed is in {args.out}", file=sys.stderr)
+            return 130
+        raise
     except (RuntimeError, OSError) as exc:  # a backend that failed midway: the file is kept
         print(f"error: {exc}", file=sys.stderr)
         if args.out and args.out.exists():

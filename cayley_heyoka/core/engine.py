@@ -39,7 +39,7 @@ from .precision import Precision, approx, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, start_values
 from .result import Result, versions
 from .scene import Scene, check_units, require_scene
-from .signals import WORKER, DeferredSignals
+from .signals import WORKER, DeferredSignals, held_signals
 
 #: Called with the time reached, in the run's precision (a float, a heyoka real128 or real).
 Progress = Callable[[Any], None]
@@ -89,7 +89,10 @@ def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: boo
         except KeyboardInterrupt:
             if propagation.status != INTERRUPTED:
                 raise
-            raise Interrupted(propagation.message, propagation.result()) from None
+            # The run is ending by a signal: another one (Ctrl-C twice) must not lose the
+            # rows while they are gathered.
+            with held_signals():
+                raise Interrupted(propagation.message, propagation.result()) from None
         result = propagation.result()
     finally:
         propagation.release()

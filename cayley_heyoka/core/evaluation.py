@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import hashlib
 import json
 import math
 import multiprocessing
@@ -40,7 +39,9 @@ PARALLEL_FROM = 200
 #: load and report progress, few enough to keep the per-chunk overhead small; each finished
 #: chunk is saved when there is a work directory, so an interrupted evaluation resumes.
 CHUNKS = 64
-_CHUNK = re.compile(r"chunk-\d{5}\.json")
+_CHUNK = re.compile(r"chunk-\d{5}\.ckpt")
+#: What older versions saved (plain JSON, unchecked): never read back.
+_LEGACY = re.compile(r"job\.json|chunk-\d{5}\.json")
 
 #: What one output time gives: written values as text (vectors as lists), absolute errors.
 Row = tuple[dict[str, Any], dict[str, float]]
@@ -147,7 +148,9 @@ def evaluate(
     times = list(times)
     size = max(1, math.ceil(len(times) / CHUNKS))
     chunks = [times[i : i + size] for i in range(0, len(times), size)]
-    done: dict[int, list[Row]] = _saved(store, job, times) if store else {}
+    sizes = [len(c) for c in chunks]
+    done: dict[int, list[Row]] = _saved(store, job, times, sizes) if store else {}
+    ident = _identity(job, times) if store else ""
     resumed = len(done)
     todo = [i for i in range(len(chunks)) if i not in done]
     count = sum(len(done[i]) for i in done)
@@ -156,7 +159,7 @@ def evaluate(
         nonlocal count
         done[i] = part
         if store:
-            _save(store / f"chunk-{i:05d}.json", part)
+            _save(store / f"chunk-{i:05d}.ckpt", i, ident, part)
         count += len(part)
         if progress:
             progress(count)
@@ -190,38 +193,44 @@ def evaluate(
 
 # ---------------------------------------------------------------------- resuming
 def _identity(job: Any, times: list[str]) -> str:
-    data = {"job": dataclasses.asdict(job), "kind": type(job).__name__, "times": times}
-    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
+    from .files import identity_of
+
+    return identity_of({"job": dataclasses.asdict(job), "kind": type(job).__name__, "times": times})
 
 
-def _saved(store: Path, job: Any, times: list[str]) -> dict[int, list[Row]]:
-    """The chunks saved in ``store`` by the same job over the same times; others are removed."""
+def _saved(store: Path, job: Any, times: list[str], sizes: list[int]) -> dict[int, list[Row]]:
+    """The chunks saved in ``store`` by the same job over the same times, each verified (its
+    checksum, the job's identity, its number of rows); any other chunk file is removed, and
+    that chunk evaluated again."""
+    from .files import OutputError, read_checkpoint
+
     ident = _identity(job, times)
-    marker = store / "job.json"
-    if store.is_dir() and _read(marker) != {"identity": ident}:
-        remove_saved(store)
-    store.mkdir(parents=True, exist_ok=True)
-    _save(marker, {"identity": ident})
+    try:
+        store.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError.failed_write(store, exc) from exc
     done = {}
     for path in store.iterdir():
-        if _CHUNK.fullmatch(path.name):
-            rows = _read(path)
-            if rows is not None:
-                done[int(path.name[6:11])] = [(v, e) for v, e in rows]
+        if _LEGACY.fullmatch(path.name) and path.is_file():
+            path.unlink()
+        if not _CHUNK.fullmatch(path.name):
+            continue
+        i = int(path.name[6:11])
+        try:
+            header, body = read_checkpoint(path, "closed-form chunk", ident)
+            rows = json.loads(body)
+            if header.get("chunk") != i or i >= len(sizes) or len(rows) != sizes[i]:
+                raise ValueError("not the chunk its name says")
+            done[i] = [(v, e) for v, e in rows]
+        except ValueError:  # damaged, another job's, or not what it claims: evaluated again
+            path.unlink()
     return done
 
 
-def _read(path: Path) -> Any:
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):  # missing, or cut short by a crash: evaluated again
-        return None
+def _save(path: Path, i: int, ident: str, part: list[Row]) -> None:
+    from .files import write_checkpoint
 
-
-def _save(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data))
-    os.replace(tmp, path)
+    write_checkpoint(path, "closed-form chunk", ident, json.dumps(part).encode(), chunk=i)
 
 
 def remove_saved(store: Path) -> None:
@@ -229,8 +238,8 @@ def remove_saved(store: Path) -> None:
     if not store.is_dir():
         return
     for path in store.iterdir():
-        name = path.name.removesuffix(".tmp")
-        if path.is_file() and (name == "job.json" or _CHUNK.fullmatch(name)):
+        name = re.sub(r"^\.(.*)\.tmp-\d+(-\d+)?$", r"\1", path.name).removesuffix(".tmp")
+        if path.is_file() and (_CHUNK.fullmatch(name) or _LEGACY.fullmatch(name)):
             path.unlink()
     with contextlib.suppress(OSError):  # not empty: what is left is not ours
         store.rmdir()

@@ -149,3 +149,41 @@ class Watch:
 
 
 WORKER = Watch()
+
+
+@contextlib.contextmanager
+def held_signals() -> Iterator[None]:
+    """Within this context (in the main thread), SIGINT and SIGTERM are noted, not acted on;
+    after it they are delivered again, each once, to whatever handles them then.
+
+    For a write that must finish once begun (:func:`cayley_heyoka.core.files.write_bytes`): a
+    Ctrl-C during it arrives after the file is in place, as a KeyboardInterrupt from the end
+    of the context. A signal left at its default disposition (SIGTERM outside the command
+    line) is held too, and then ends the process after the write; an ignored one stays
+    ignored. When the context ends by an exception, which already ends the work, a noted
+    signal is not delivered again. Contexts nest: an inner one hands its signals to the outer.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield  # Python delivers signals to the main thread only: nothing interrupts this one
+        return
+    noted: list[int] = []
+
+    def note(signum: int, frame: Any) -> None:
+        if signum not in noted:
+            noted.append(signum)
+
+    old = {}
+    for sig in SIGNALS:
+        handler = signal.getsignal(sig)
+        if handler is not signal.SIG_IGN and handler is not None:
+            old[sig] = signal.signal(sig, note)
+    try:
+        yield
+    except BaseException:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        raise
+    for sig, handler in old.items():
+        signal.signal(sig, handler)
+    for signum in noted:
+        signal.raise_signal(signum)

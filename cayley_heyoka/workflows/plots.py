@@ -330,11 +330,15 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
             plot.figure(fig, result)
         except PlotError as exc:
             raise PlotError(f"{exc}{_supported(result)}") from None
-    from ..core.files import PNG_SOFTWARE, write_atomically
+    import io
+
+    from ..core.files import PNG_SOFTWARE, write_bytes
 
     # The Software tag is how a later `plot` recognises a PNG it may replace.
     tag = {"metadata": {"Software": f"{PNG_SOFTWARE} plot"}} if fmt_out == "png" else {}
-    write_atomically(out, lambda tmp: fig.savefig(tmp, dpi=110, format=fmt_out, **tag))
+    image = io.BytesIO()
+    fig.savefig(image, dpi=110, format=fmt_out, **tag)
+    write_bytes(out, image.getbuffer())
     return out
 
 

@@ -30,7 +30,9 @@ absolute where |x| ≤ 1, relative above), the precision is raised and the work 
 
 Integrations go through :class:`~cayley_heyoka.workflows.checkpoint.CheckpointedRun` in a work
 directory beside the output (``REF.h5.work``): an interrupted command, run again, continues
-where it stopped and writes the same bits as an uninterrupted one. Once the file is written,
+where it stopped and writes the same bits as an uninterrupted one (every checkpoint verified by
+its checksum and the run's identity first). The running command holds the directory locked
+(:data:`WORK_LOCK`): a second one on the same output is refused. Once the file is written,
 the files the runs wrote there are removed (and the directory, if nothing else is in it); a
 ``OUT.work`` that this command did not make (it carries the marker file :data:`WORK_MARKER`)
 is refused, not touched. The closed-form route needs no work directory: it writes the file
@@ -80,6 +82,8 @@ STRETCHES = 64
 METHODS = ("auto", "closed-form", "integrate", "two-precisions")
 #: The file that marks a work directory as made by :func:`generate_reference`.
 WORK_MARKER = ".cayley_heyoka-reference-work"
+#: The file a running :func:`generate_reference` holds locked in its work directory.
+WORK_LOCK = ".cayley_heyoka-reference-lock"
 
 
 @dataclass
@@ -173,8 +177,12 @@ def generate_reference(
         ``precision`` or ``tolerance`` the scene refuses, such as a tolerance below 1e-6 of
         the precision's epsilon).
     OutputError
-        Before anything is integrated: ``out`` may not be written, or ``workdir`` exists and
-        is not a work directory of this function.
+        Before anything is integrated: ``out`` may not be written, ``workdir`` exists and
+        is not a work directory of this function, or another process is running this
+        function on it. After: :class:`~cayley_heyoka.core.files.WriteFailed`, a file could
+        not be written (a full disk); what was checkpointed is kept.
+    CheckpointMismatch
+        ``workdir`` holds the checkpoints of another run (another scene, precision, ...).
     RuntimeError
         The closed form could not certify its own digits at some time (next to a singular
         configuration), or an integration stopped.
@@ -240,102 +248,114 @@ def generate_reference(
                 "give (it gives the state, the attitude and the conserved monitors); use "
                 "'integrate'"
             )
-    _claim_workdir(workdir)
-    if evaluated is not None:
-        outcome = _closed_form_reference(
-            scene, closed, digits, out, first, max_bits, workers, workdir, progress, say, command
-        )
-        if not keep_work:
-            _remove_workdir(workdir)
-        return outcome
-    say(
-        f"plan: {digits} digits; {label(first)} first; certificate "
-        + (f"from the closed form ({closed.name})" if closed else "from a second precision")
-    )
-    started = time.perf_counter()
-    attempts: list[dict[str, Any]] = []
-    runs: dict[str, Any] = {}
-
-    def integrate(prec: Precision, tol: str | None) -> Any:
-        key = f"{prec.name}:{tol}"
-        if key not in runs:
-            from .checkpoint import CheckpointedRun
-
-            variant = with_precision(scene, prec, tol)
-            where = workdir / f"run-{prec.name}" if tol is None else workdir / f"run-{prec.name}-t"
-            job = CheckpointedRun(variant, where, stretches, _labelled(progress, prec.name))
-            resumed = job.completed()
-            t0 = time.perf_counter()
-            result = job.run()
-            note = f" (resumed after {resumed} of {stretches} stretches)" if resumed else ""
-            say(
-                f"run {label(prec)}: {result.counters.get('steps', 0)} steps, "
-                f"{time.perf_counter() - t0:.2f} s{note}"
+    # Held to the end: a second command on the same --out is refused, not mixed in.
+    with _claim_workdir(workdir):
+        if evaluated is not None:
+            outcome = _closed_form_reference(
+                scene,
+                closed,
+                digits,
+                out,
+                first,
+                max_bits,
+                workers,
+                workdir,
+                progress,
+                say,
+                command,
+                None if keep_work else workdir,
             )
-            if not result.success:
-                # What was computed is kept, as `run --out` keeps it; it certifies nothing.
-                stopped = Certificate("none", "the run stopped", {}, scaled=math.inf)
-                meta = {"command": command or [], "digits": digits, "certified": False}
-                _write(out, result, stopped, digits, False, meta)
-                raise RuntimeError(
-                    f"the {label(prec)} run stopped: {result.message}; what it computed is in "
-                    f"{out} (not certified)"
-                )
-            runs[key] = (result, where)
-        return runs[key][0]
-
-    prec, tol = first, tolerance
-    while True:
-        result = integrate(prec, tol)
-        if closed is not None:
-            written = result
-            cert = closed.certificate(result, digits)
-        else:
-            check = next_precision(prec)
-            if check.bits > max_bits:
-                # No higher rung left to compare with: the last comparison stands.
-                break
-            written = integrate(check, None)
-            cert = difference_certificate(written, result)
-        attempts.append(
-            {
-                "precision": prec.name,
-                "tolerance": tol or "epsilon",
-                "compared_with": cert.compared_with,
-                "scaled_error": cert.scaled,
-                "worst": list(cert.worst),
-            }
-        )
+            return outcome
         say(
-            f"certificate: {cert.digits_text()} {'proved' if cert.proved else 'estimated'} "
-            f"(largest scaled error {cert.scaled:.2e} in {_where(cert)})"
+            f"plan: {digits} digits; {label(first)} first; certificate "
+            + (f"from the closed form ({closed.name})" if closed else "from a second precision")
         )
-        if cert.scaled <= 10.0**-digits:
-            break
-        # Up one rung; with two precisions the more precise run becomes the one checked.
-        prec, tol = (next_precision(prec) if closed else written.precision), None
-        if (next_precision(prec) if closed is None else prec).bits > max_bits:
-            break
-        say(f"not enough: raising the precision to {label(prec)}")
-    if not attempts:
-        raise ValueError(f"max_bits ({max_bits}) leaves no higher precision to compare with")
-    certified = attempts[-1]["scaled_error"] <= 10.0**-digits
-    metadata = _metadata(
-        scene,
-        command,
-        "integration",
-        digits,
-        certified,
-        written.precision,
-        attempts,
-        max_bits,
-        started,
-        stretches=stretches,
-    )
-    _write(out, written, cert, digits, certified, metadata)
-    if not keep_work:
-        _remove_workdir(workdir)
-    return ReferenceOutcome(out, certified, cert, written.precision, attempts)
+        started = time.perf_counter()
+        attempts: list[dict[str, Any]] = []
+        runs: dict[str, Any] = {}
+
+        def integrate(prec: Precision, tol: str | None) -> Any:
+            key = f"{prec.name}:{tol}"
+            if key not in runs:
+                from .checkpoint import CheckpointedRun
+
+                variant = with_precision(scene, prec, tol)
+                where = (
+                    workdir / f"run-{prec.name}" if tol is None else workdir / f"run-{prec.name}-t"
+                )
+                job = CheckpointedRun(variant, where, stretches, _labelled(progress, prec.name))
+                t0 = time.perf_counter()
+                result = job.run()
+                for line in job.notes:
+                    say(f"work directory: {line}")
+                resumed = job.resumed
+                note = f" (resumed after {resumed} of {stretches} stretches)" if resumed else ""
+                say(
+                    f"run {label(prec)}: {result.counters.get('steps', 0)} steps, "
+                    f"{time.perf_counter() - t0:.2f} s{note}"
+                )
+                if not result.success:
+                    # What was computed is kept, as `run --out` keeps it; it certifies nothing.
+                    stopped = Certificate("none", "the run stopped", {}, scaled=math.inf)
+                    meta = {"command": command or [], "digits": digits, "certified": False}
+                    _write(out, result, stopped, digits, False, meta)
+                    raise RuntimeError(
+                        f"the {label(prec)} run stopped: {result.message}; what it computed is in "
+                        f"{out} (not certified)"
+                    )
+                runs[key] = (result, where)
+            return runs[key][0]
+
+        prec, tol = first, tolerance
+        while True:
+            result = integrate(prec, tol)
+            if closed is not None:
+                written = result
+                cert = closed.certificate(result, digits)
+            else:
+                check = next_precision(prec)
+                if check.bits > max_bits:
+                    # No higher rung left to compare with: the last comparison stands.
+                    break
+                written = integrate(check, None)
+                cert = difference_certificate(written, result)
+            attempts.append(
+                {
+                    "precision": prec.name,
+                    "tolerance": tol or "epsilon",
+                    "compared_with": cert.compared_with,
+                    "scaled_error": cert.scaled,
+                    "worst": list(cert.worst),
+                }
+            )
+            say(
+                f"certificate: {cert.digits_text()} {'proved' if cert.proved else 'estimated'} "
+                f"(largest scaled error {cert.scaled:.2e} in {_where(cert)})"
+            )
+            if cert.scaled <= 10.0**-digits:
+                break
+            # Up one rung; with two precisions the more precise run becomes the one checked.
+            prec, tol = (next_precision(prec) if closed else written.precision), None
+            if (next_precision(prec) if closed is None else prec).bits > max_bits:
+                break
+            say(f"not enough: raising the precision to {label(prec)}")
+        if not attempts:
+            raise ValueError(f"max_bits ({max_bits}) leaves no higher precision to compare with")
+        certified = attempts[-1]["scaled_error"] <= 10.0**-digits
+        metadata = _metadata(
+            scene,
+            command,
+            "integration",
+            digits,
+            certified,
+            written.precision,
+            attempts,
+            max_bits,
+            started,
+            stretches=stretches,
+        )
+        _write(out, written, cert, digits, certified, metadata, None if keep_work else workdir)
+        return ReferenceOutcome(out, certified, cert, written.precision, attempts)
 
 
 def _closed_form_reference(
@@ -350,8 +370,10 @@ def _closed_form_reference(
     progress: Any,
     say: Any,
     command: list[str] | None,
+    remove: Path | None,
 ) -> ReferenceOutcome:
-    """The closed-form route of :func:`generate_reference`: evaluate, certify, write."""
+    """The closed-form route of :func:`generate_reference`: evaluate, certify, write (and
+    remove the work directory ``remove``, if given)."""
     from ..core.accuracy import PrecisionNotReached
 
     say(f"plan: {digits} digits; the closed form ({closed.name}) in {label(prec)}")
@@ -388,7 +410,7 @@ def _closed_form_reference(
     metadata = _metadata(
         scene, command, "closed form", digits, certified, prec, attempts, max_bits, started
     )
-    _write(out, result, cert, digits, certified, metadata)
+    _write(out, result, cert, digits, certified, metadata, remove)
     return ReferenceOutcome(out, certified, cert, prec, attempts)
 
 
@@ -459,8 +481,18 @@ def _where(cert: Certificate) -> str:
 
 
 def _write(
-    out: Path, result: Any, cert: Certificate, digits: int, certified: bool, meta: dict
+    out: Path,
+    result: Any,
+    cert: Certificate,
+    digits: int,
+    certified: bool,
+    meta: dict,
+    remove: Path | None = None,
 ) -> None:
+    """Write the reference file, then remove the work directory ``remove`` (if given): both,
+    even under a signal, which takes effect after them."""
+    from ..core.signals import held_signals
+
     result.metadata = {**result.metadata, "reference": meta}
 
     def fill(f: Any) -> None:
@@ -484,31 +516,58 @@ def _write(
         for name, err in cert.event_errors.items():
             ge.create_dataset(name, data=err)
 
-    write_hdf5(out, fill)
+    with held_signals():
+        write_hdf5(out, fill)
+        if remove is not None:
+            _remove_workdir(remove)
 
 
-def _claim_workdir(workdir: Path) -> None:
-    """Make ``workdir`` ours, or refuse one that someone else made (before any run)."""
+def _claim_workdir(workdir: Path) -> Any:
+    """Make ``workdir`` ours and hold it (a context manager), or refuse one that someone else
+    made or that another command holds (before any run)."""
+    from ..core.files import write_bytes
+
     marker = workdir / WORK_MARKER
-    if marker.is_file():
-        return
-    if workdir.is_dir() and any(workdir.iterdir()):
-        raise OutputError(
-            workdir,
-            "exists and was not made by `cayley-heyoka reference` (no "
-            f"{WORK_MARKER} in it); move it away, it is left untouched",
-        )
-    if workdir.exists() and not workdir.is_dir():
-        raise OutputError(workdir, "exists and is not a directory; move it away")
+    if not marker.is_file():
+        if workdir.is_dir() and any(workdir.iterdir()):
+            raise OutputError(
+                workdir,
+                "exists and was not made by `cayley-heyoka reference` (no "
+                f"{WORK_MARKER} in it); move it away, it is left untouched",
+            )
+        if workdir.exists() and not workdir.is_dir():
+            raise OutputError(workdir, "exists and is not a directory; move it away")
+        made = not workdir.exists()
+        try:
+            workdir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(workdir, f"cannot be created ({exc.strerror or exc})") from exc
+        try:
+            write_bytes(marker, b"work directory of cayley-heyoka reference\n")
+        except OutputError as exc:
+            if made:
+                with contextlib.suppress(OSError):
+                    workdir.rmdir()
+            raise OutputError(workdir, f"cannot be made ours: {WORK_MARKER} {exc.what}") from exc
+    return _held(workdir)
+
+
+@contextlib.contextmanager
+def _held(workdir: Path) -> Any:
+    from ..core.files import locked_directory
+
     try:
-        workdir.mkdir(parents=True, exist_ok=True)
-        marker.write_text("work directory of cayley-heyoka reference\n")
-    except OSError as exc:
-        raise OutputError(workdir, f"cannot be created ({exc.strerror or exc})") from exc
+        with locked_directory(workdir, WORK_LOCK, "`cayley-heyoka reference`"):
+            yield
+    finally:
+        if not (workdir / WORK_MARKER).exists():  # emptied by _remove_workdir
+            with contextlib.suppress(OSError):  # not empty: what is left is not ours
+                workdir.rmdir()
 
 
 def _remove_workdir(workdir: Path) -> None:
-    """Remove what the runs wrote in ``workdir``; anything else stays, with its directory."""
+    """Remove what the runs wrote in ``workdir``; anything else stays, with its directory
+    (which goes once its lock is released, if that empties it)."""
     from ..core.evaluation import remove_saved
     from .checkpoint import remove_checkpoints
 
@@ -517,8 +576,6 @@ def _remove_workdir(workdir: Path) -> None:
     for store in workdir.glob("closed-form-*"):
         remove_saved(store)
     (workdir / WORK_MARKER).unlink(missing_ok=True)
-    with contextlib.suppress(OSError):  # not empty: what is left is not ours
-        workdir.rmdir()
 
 
 def read_certificate(path: str | Path) -> dict[str, Any]:

@@ -42,7 +42,7 @@ KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")
 DISTRIBUTIONS = ("uniform", "normal")
 
-#: Members per write on the local backend, and at most per task on Dask: small enough that an
+#: Members per batch on the local backend, and at most per task on Dask: small enough that an
 #: interrupted sweep loses little and heyoka's ensemble holds few integrator copies at once,
 #: large enough that a task's overhead (building the members' models, a round trip to the
 #: scheduler) stays small beside its propagation.
@@ -95,7 +95,7 @@ class RunOptions:
     workers
         Threads (local) or worker processes of the LocalCluster (default: the CPU count).
     chunk
-        Members per task on Dask, per write on the local backend (default: see
+        Members per task on Dask, per batch on the local backend (default: see
         :func:`run_sweep`).
     """
 

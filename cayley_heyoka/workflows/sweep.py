@@ -23,7 +23,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..core.files import WriteFailed
 from ..core.scene import Scene
+from ..core.signals import held_signals
 from .members import integrate_members, prepare_members, propagate_members, split
 from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
 from .sweep_result import (
@@ -33,7 +35,6 @@ from .sweep_result import (
     Chunk,
     Layout,
     SweepResult,
-    Writer,
     empty_result,
     fill_chunk,
     load_sweep,
@@ -111,9 +112,10 @@ def run_sweep(
     study
         A validated study (:func:`load_study`).
     out
-        The HDF5 sweep file, written chunk by chunk as members complete: a sweep stopped
-        midway (an interruption, a lost cluster) leaves a readable file with what it computed,
-        its other members marked ``NOT_RUN`` and ``metadata["complete"]`` false.
+        The HDF5 sweep file, written (:func:`~cayley_heyoka.core.files.write_hdf5`) when the
+        sweep ends: a sweep stopped midway (an interruption, a lost cluster) leaves a
+        readable file with what it computed, its other members marked ``NOT_RUN`` and
+        ``metadata["complete"]`` false.
     backend, scheduler, workers, chunk
         Override the study's ``[run]`` table (see :class:`RunOptions`). ``chunk`` defaults to
         256 members locally and, on Dask, to a quarter of an even share per worker (at most
@@ -151,7 +153,6 @@ def run_sweep(
     layout = layout_of(study)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
-    writer = Writer(out, result) if out is not None else None
     paths: Counter = Counter()
     why: dict[str, str] = {}
     compile_seconds = 0.0
@@ -162,8 +163,6 @@ def run_sweep(
     def take(part: Chunk) -> None:
         nonlocal compile_seconds, done
         fill_chunk(result, part, prec)
-        if writer is not None:
-            writer.write(part, prec)
         paths.update(part.paths)
         why.update(part.why)
         compile_seconds += part.compile_seconds
@@ -190,18 +189,25 @@ def run_sweep(
     finally:
         from ..core.result import versions
 
-        result.metadata = {
-            **versions(),
-            **info,
-            "wall_seconds": time.perf_counter() - wall0,
-            "compile_seconds": compile_seconds,
-            "paths": dict(paths),
-            "why": why,
-            "complete": stopped is None,
-            "stopped": stopped,
-        }
-        if writer is not None:
-            writer.close(result.metadata)
+        # Also when the sweep stopped midway (a second Ctrl-C included): what it computed
+        # is kept.
+        with held_signals():
+            result.metadata = {
+                **versions(),
+                **info,
+                "wall_seconds": time.perf_counter() - wall0,
+                "compile_seconds": compile_seconds,
+                "paths": dict(paths),
+                "why": why,
+                "complete": stopped is None,
+                "stopped": stopped,
+            }
+            if out is not None:
+                try:
+                    result.save(out)
+                except WriteFailed as exc:
+                    exc.result = result
+                    raise
     return result
 
 

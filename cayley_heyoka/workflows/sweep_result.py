@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.files import FORMAT_VERSION, FORMATS, OutputError, Staged, open_ours, seal, write_hdf5
+from ..core.files import FORMAT_VERSION, FORMATS, open_ours, write_hdf5
 from ..core.precision import Precision
 from ..core.result import source_line
 from ..core.scene import Scene
@@ -550,76 +550,6 @@ def _create(f: Any, result: SweepResult) -> None:
         dtype=np.int64,
     )
     over(ds, ("member", "event"), LONG_NAMES["events"])
-
-
-class Writer:
-    """The sweep file, created with every member ``NOT_RUN`` and filled chunk by chunk.
-
-    It is filled under a temporary name beside ``path`` and put in place by :meth:`close`
-    (also when the sweep stops midway): a sweep killed outright leaves the previous file, and
-    so does one whose writing failed (a full disk: :class:`OutputError`).
-    """
-
-    def __init__(self, path: str | Path, result: SweepResult) -> None:
-        import h5py
-
-        self.path = path
-        self.staged = Staged(path)
-        self.file = None
-        try:
-            self.file = h5py.File(self.staged.tmp, "w", track_order=True)
-            _create(self.file, result)
-            self.order = json.loads(self.file.attrs["order"])
-            self.file.flush()
-        except BaseException as exc:
-            self._abandon(exc)
-
-    def _abandon(self, exc: BaseException) -> None:
-        """Drop the temporary (the previous file stays) and raise ``exc``."""
-        if self.file is not None:
-            self.file.close()
-            self.file = None
-        self.staged.discard()
-        if isinstance(exc, OSError):
-            raise OutputError.failed_write(self.path, exc) from exc
-        raise exc
-
-    def write(self, part: Chunk, prec: Precision) -> None:
-        try:
-            self._write(part, prec)
-        except OSError as exc:
-            self._abandon(exc)
-
-    def _write(self, part: Chunk, prec: Precision) -> None:
-        f, rows = self.file, np.asarray(part.index)
-        if f is None or not len(rows):
-            return
-        # h5py's fancy indexing wants increasing indices.
-        order = np.argsort(rows)
-        rows = rows[order]
-        f["status"][rows] = np.asarray(part.status, dtype=np.int8)[order]
-        f["message"][rows] = np.asarray(part.message, dtype=object)[order]
-        f["steps"][rows] = np.asarray(part.steps)[order]
-        monitors, events = self.order["drift"], self.order["events"]
-        for name, d in part.drift.items():
-            f["drift"][monitors.index(name), rows, :] = d[order]
-        for name, c in part.events.items():
-            f["events"][rows, events.index(name)] = c[order]
-        final = part.final[order]
-        f["final_state"][rows] = final if prec.kind == "double" else final.astype(object)
-        f.flush()
-
-    def close(self, metadata: dict[str, Any]) -> None:
-        if self.file is None:  # abandoned after a failed write
-            return
-        try:
-            self.file.attrs["metadata"] = json.dumps(metadata)
-            self.file.attrs["source"] = source_line(metadata)
-            seal(self.file)
-            self.file.close()
-        except BaseException as exc:
-            self._abandon(exc)
-        self.staged.commit()
 
 
 def _text(s: Any) -> str:

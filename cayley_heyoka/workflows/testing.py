@@ -315,10 +315,11 @@ class DriftEnvelope:
         return self.precision.epsilon
 
     def save(self, path: str | Path) -> None:
-        """Write the envelope to an HDF5 file (``attrs["format"] = "cayley_heyoka.drift"``)."""
-        import h5py
+        """Write the envelope to an HDF5 file (``attrs["format"] = "cayley_heyoka.drift"``),
+        atomically, as every file of ours (:func:`cayley_heyoka.core.files.write_hdf5`)."""
+        from ..core.files import write_hdf5
 
-        with h5py.File(path, "w") as f:
+        def fill(f: Any) -> None:
             f.attrs["format"] = DRIFT_FORMAT
             f.attrs["format_version"] = DRIFT_FORMAT_VERSION
             f.attrs["title"] = self.title
@@ -330,6 +331,8 @@ class DriftEnvelope:
             g.attrs["order"] = json.dumps(list(self.peaks))
             for name, values in self.peaks.items():
                 g.create_dataset(name, data=np.asarray(values, dtype=np.float64))
+
+        write_hdf5(path, fill)
 
     @classmethod
     def load(cls, path: str | Path) -> DriftEnvelope:
