@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from .errors import SceneError
+from .names import SCENE_TABLES, check_scene, name_problem
 from .precision import Number, Precision, exact_fraction, unit_length
 
 _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
@@ -354,8 +355,8 @@ def parse_monitors(table: Any) -> dict[str, UserMonitor]:
     out = {}
     for name, spec in table.items():
         where = f"monitors.{name}"
-        if not isinstance(name, str) or not name.isidentifier() or name.startswith("_"):
-            raise SceneError(where, "a monitor's name must be an identifier (letters, digits, _)")
+        if problem := name_problem(name):
+            raise SceneError(where, problem)
         if not isinstance(spec, Mapping):
             raise SceneError(where, f'must be a table {{expression = "…"}}, got {spec!r}')
         check_keys(spec, ["expression", "conserved"], where)
@@ -398,8 +399,7 @@ class Scene:
             raise SceneError("scene", f"must be a table, got {type(data).__name__}")
         family = family_of(data)
         spec = FAMILIES[family]
-        generic = ["title", "integrator", "output", "events", "monitors"]
-        check_keys(data, [*generic, *spec.tables], "")
+        check_keys(data, [*SCENE_TABLES, *spec.tables], "")
         title = data.get("title", "")
         if not isinstance(title, str):
             raise SceneError("title", f"must be a string, got {title!r}")
@@ -410,6 +410,7 @@ class Scene:
             raise SceneError("events", "must be a table of [events.NAME] tables")
         events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
         monitors = parse_monitors(data.get("monitors", {}))
+        check_scene(data, monitors, events, spec.name, spec.events, spec.variables)
         model = spec.parse({k: data[k] for k in spec.tables if k in data})
         scene = cls(family, model, integrator, output, events, title, plain_copy(data), monitors)
         if spec.validate is not None:

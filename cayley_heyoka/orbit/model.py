@@ -35,6 +35,7 @@ from . import equations as eq
 from .disturbing import Context, Gradient, force, term_functions
 from .encke import STATE as ENCKE
 from .encke import Encke
+from .family import FAMILY
 from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
 from .tilt import (
@@ -50,7 +51,8 @@ from .tilt import (
 CARTESIAN = ("x", "y", "z", "vx", "vy", "vz")
 CAYLEY = ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi")
 QUATERNION = ("qw", "qx", "qy", "qz")
-EVENTS = ("node", "apsis", "equatorial")
+#: The events the family offers (its record, :data:`.family.FAMILY`, declares them).
+EVENTS = FAMILY.events
 _GUARD_DIGITS = 15
 
 
