@@ -22,8 +22,7 @@ import cayley_heyoka as ch
 from cayley_heyoka.core.errors import SceneError
 from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.core.result import EventLog, Result
-
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+from cayley_heyoka.workflows.sweep_result import SweepResult
 
 
 def _with(data: dict, *, monitors: dict | None = None, events: dict | None = None) -> dict:
@@ -270,6 +269,25 @@ def test_multiprecision_number_beyond_double_is_refused_and_tiny_ones_round():
     small_ = Result(t=prec.array(["0", "1", "2", "3"]), variables={"y": y}, precision=prec)
     y = small_.to_xarray(as_double=True)["y"].values
     assert y[0] == 0.0 and y[1] == -3e-320 and np.isnan(y[2]) and y[3] == -np.inf
+
+
+@pytest.mark.covers("class:12", "api:SweepResult.to_xarray", "api:SweepResult.to_pandas")
+def test_sweep_parameter_beyond_double_is_refused_as_double():
+    prec = Precision("quad")
+    sweep = SweepResult(
+        t=prec.array(["0", "1"]),
+        parameters={"initial.rates[0]": prec.array(["1", "-5.8e702"])},
+        drift={},
+        final_names=("p",),
+        final_state=prec.array(["1", "2"]).reshape(2, 1),
+        status=np.zeros(2, dtype=int),
+        message=np.array(["ok", "ok"], dtype=object),
+        steps=np.zeros(2, dtype=np.int64),
+        precision=prec,
+    )
+    for view in (sweep.to_xarray, sweep.to_pandas):
+        with pytest.raises(ValueError, match=r"initial\.rates\[0\] in quad: \[1\] is -5\.79"):
+            view(as_double=True)
 
 
 @pytest.mark.covers("class:12", "verb:plot")
