@@ -398,7 +398,8 @@ def test_a_plugin_whose_descriptions_raise_still_saves_its_run(hostile, monkeypa
     must not lose the run."""
     plugin_family.install(monkeypatch, faulty="plugin_family:FAULTY_VARIABLES")
     out = tmp_path / "r.h5"
-    hostile.run(["run", str(hostile.scene(OSCILLATOR)), "--out", str(out)], expect="done", out=out)
+    data = {**OSCILLATOR, "monitors": {"x2": {"expression": "x*x", "conserved": False}}}
+    hostile.run(["run", str(hostile.scene(data)), "--out", str(out)], expect="done", out=out)
     o = hostile.run(["info", str(out), "--variables"], expect="done")
     assert "not described: the family 'faulty'" in o.stdout
 
