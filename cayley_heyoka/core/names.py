@@ -13,9 +13,10 @@ This module keeps the layouts' own names (:data:`RESULT_FILE`, :data:`SWEEP_FILE
 :data:`SCENE_TABLES`), the rule that flattens a vector into the columns of a table
 (:func:`columns`), the rule a name must follow to be written at all (:func:`name_problem`), and
 the checks that give each name one holder: :func:`check_scene` when a scene is validated (the
-user's names against the layouts and the family's names and events) and :func:`check_model`
-when its model is built (every output and monitor, and each column of a vector). A collision
-is refused with the field at fault and what already holds the name, before any work.
+user's names against the layouts and the family's events) and :func:`check_model` when its
+model is built (every output and monitor, the user's among them, and each column of a
+vector). A collision is refused with the field at fault and what already holds the name,
+before any work.
 
 It imports nothing heavier than the standard library: readers of files (``info``) use it
 without heyoka.
@@ -26,7 +27,7 @@ from __future__ import annotations
 import itertools
 import re
 import unicodedata
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable
 from typing import Any
 
 from .errors import SceneError
@@ -136,50 +137,32 @@ class Holders:
 
 
 def check_scene(
-    data: Mapping[str, Any],
-    monitors: Iterable[str],
-    events: Iterable[str],
-    family: str,
-    family_events: Iterable[str],
-    describe: Callable[[Mapping[str, Any], str], str | None] | None,
+    monitors: Iterable[str], events: Iterable[str], family: str, family_events: Iterable[str]
 ) -> None:
-    """Refuse a user monitor or event whose name is taken, when the scene is validated.
+    """Refuse a user monitor or event whose name no layout can hold or that is taken, when the
+    scene is validated (the names of the model come later: :func:`check_model`).
 
     Parameters
     ----------
-    data
-        The scene, as the plain dictionary it was given as.
     monitors, events
-        The names of its ``[monitors.NAME]`` and ``[events.NAME]`` tables.
-    family, family_events, describe
-        The family's name, the events it offers (``Family.events``) and what it says each of
-        its outputs and monitors is (``Family.variables``, asked of the scene without its
-        ``[monitors]``, so that it answers for the family alone).
+        The names of the scene's ``[monitors.NAME]`` and ``[events.NAME]`` tables.
+    family, family_events
+        The family's name and the events it offers (``Family.events``): a family picks its
+        own event by name, so a user event of that name would be silently replaced.
 
     Raises
     ------
     SceneError
-        ``monitors.NAME`` for a name of the layouts or of the family's outputs and monitors
-        (in any scene of the family: a user monitor never stands in for one of them);
-        ``events.NAME`` for a name that is not a name or is one of the family's events.
+        ``monitors.NAME`` for a name that is not a name (:func:`name_problem`) or one of the
+        layouts' own (:func:`layout_holder`); ``events.NAME`` for a name that is not a name
+        or is one of the family's events.
     """
-    alone = {k: v for k, v in data.items() if k != "monitors"}
     for name in monitors:
         where = f"monitors.{name}"
         if problem := name_problem(name):
             raise SceneError(where, problem)
         if holder := layout_holder(name):
             raise SceneError(where, f"{name!r} is {holder}; name the monitor otherwise")
-        try:
-            text = describe(alone, name) if describe is not None else None
-        except SceneError:  # another package's family failing to say: its model is checked
-            text = None
-        if text is not None:
-            raise SceneError(
-                where,
-                f"{name!r} is a name of the {family} family's results ({text}); name the "
-                "monitor otherwise",
-            )
     own = tuple(family_events)
     for name in events:
         where = f"events.{name}"

@@ -410,7 +410,7 @@ class Scene:
             raise SceneError("events", "must be a table of [events.NAME] tables")
         events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
         monitors = parse_monitors(data.get("monitors", {}))
-        check_scene(data, monitors, events, spec.name, spec.events, spec.variables)
+        check_scene(monitors, events, spec.name, spec.events)
         model = spec.parse({k: data[k] for k in spec.tables if k in data})
         scene = cls(family, model, integrator, output, events, title, plain_copy(data), monitors)
         if spec.validate is not None:
