@@ -8,6 +8,7 @@ from importlib import metadata
 
 import numpy as np
 import pytest
+from plugin_family import install
 
 import cayley_heyoka as ch
 from cayley_heyoka.core import families
@@ -20,16 +21,7 @@ OSCILLATOR = {
 
 def _fresh(monkeypatch, *points: metadata.EntryPoint) -> None:
     """The registry as a new process finds it, with ``points`` installed; restored after."""
-    real = metadata.entry_points
-
-    def entry_points(**select):
-        if select.get("group") == families.ENTRY_POINTS:
-            return metadata.EntryPoints(points)
-        return real(**select)
-
-    monkeypatch.setattr(metadata, "entry_points", entry_points)
-    monkeypatch.setattr(families.FAMILIES, "_paths", None)
-    monkeypatch.setattr(families.FAMILIES, "_loaded", {})
+    install(monkeypatch, **{p.name: p.value for p in points})
 
 
 @pytest.fixture

@@ -147,9 +147,9 @@ def test_output_monitors_may_list_them_and_must_not_forget_them():
         ({"K": {"expression": "p", "conserved": "yes"}}, "monitors.K.conserved", "true or false"),
         ({"K": {"expression": "p", "conservd": True}}, "monitors.K.conservd", "conserved"),
         ({"2K": {"expression": "p"}}, "monitors.2K", "identifier"),
-        ({"_K": {"expression": "p"}}, "monitors._K", "identifier"),
-        ({"energy": {"expression": "p"}}, "monitors.energy", "already an output or monitor"),
-        ({"p": {"expression": "q"}}, "monitors.p", "already an output or monitor"),
+        ({"_K": {"expression": "p"}}, "monitors._K", "must not start with _"),
+        ({"energy": {"expression": "p"}}, "monitors.energy", "already the built-in monitor"),
+        ({"p": {"expression": "q"}}, "monitors.p", "already the built-in output p"),
         ({"K": {"expression": "p + omega"}}, "monitors.K.expression", "unknown name 'omega'"),
         ({"K": {"expression": "__import__('os')"}}, "monitors.K.expression", "unknown function"),
         ({"K": {"expression": "p^2"}}, "monitors.K.expression", "a power is written **"),
@@ -194,3 +194,16 @@ def test_hamiltonian_scenes_take_user_monitors():
     result = ch.run(ch.Scene.from_dict(scene))
     assert np.max(np.abs(result.drift("L3"))) < 1e-12
     assert np.max(np.abs(result.drift("L2"))) > 1e-3
+
+
+def test_monitors_whose_names_are_free_keep_every_column(tmp_path):
+    """A free name stays free: K and k are two monitors (every layout is case-sensitive), and
+    the family's vector momentum_space keeps its three columns beside them."""
+    scene = kovalevskaya(stop=1, monitors={"K": {"expression": "p*p"}, "k": {"expression": "q*q"}})
+    result = ch.run(ch.Scene.from_dict(scene))
+    frame = result.to_pandas()
+    assert {"K", "k", "momentum_space_x", "momentum_space_y", "momentum_space_z"} <= set(frame)
+    result.save(tmp_path / "r.h5")
+    back = ch.load_result(tmp_path / "r.h5")
+    assert np.array_equal(back["K"], result["K"]) and np.array_equal(back["k"], result["k"])
+    assert not np.array_equal(back["K"], back["k"])

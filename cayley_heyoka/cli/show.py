@@ -160,7 +160,10 @@ def variable_lines(scene: dict[str, Any], names: Iterable[str]) -> list[str]:
         return [f"  variables     not described: {exc.constraint}"]
     lines = ["  variables     what each output and monitor is:"]
     for name in names:
-        text = family.variables(scene, name) if family.variables is not None else None
+        try:
+            text = family.variables(scene, name) if family.variables is not None else None
+        except SceneError as exc:  # a family of another package failing to say
+            text = f"(not described: {exc.constraint})"
         lines.append(
             f"    {name:<20} {text or '(not described by the ' + family.name + ' family)'}"
         )

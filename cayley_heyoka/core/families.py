@@ -6,6 +6,14 @@ it only through its :class:`Family` record, never by its name. Ours are register
 module path; another package adds one through the entry-point group
 ``cayley_heyoka.families`` (``name = "package.module:FAMILY"``), without touching ours. A
 family's module is imported the first time the registry is asked for it.
+
+A family of another package cannot take what is ours or another's: a family named like one
+of ours, one that claims one of our families' tables or a table every scene has
+(:data:`.names.SCENE_TABLES`), two that claim one table or one name, and one that fails to
+load are not used (they are left out of the registry, and named when a scene finds no
+family). Their hooks run guarded: an exception other than :class:`~.errors.SceneError` or
+:class:`~.errors.IntegrationError` escaping one becomes a :class:`~.errors.SceneError`
+naming the family and the hook.
 """
 
 from __future__ import annotations
@@ -15,7 +23,8 @@ from dataclasses import dataclass, field, replace
 from importlib import import_module
 from typing import Any
 
-from .errors import SceneError
+from .errors import IntegrationError, SceneError
+from .names import SCENE_TABLES, check_model
 
 #: The entry-point group through which another package registers a family.
 ENTRY_POINTS = "cayley_heyoka.families"
@@ -69,6 +78,9 @@ class Family:
     formulations
         ``("table.key", (value, ...))``: the scene key that picks the family's formulation and
         the values a planner may try (:mod:`cayley_heyoka.workflows.planner`), or None.
+    events
+        The names of the events the family offers (``output.events``): no user event
+        (``[events.NAME]``) may take one (:func:`.names.check_scene`).
     """
 
     name: str
@@ -86,6 +98,7 @@ class Family:
     references: Mapping[str, str] = field(default_factory=dict)
     memoirs: tuple[str, ...] = ()
     formulations: tuple[str, tuple[str, ...]] | None = None
+    events: tuple[str, ...] = ()
 
 
 def later(module: str, name: str) -> Callable[..., Any]:
@@ -103,14 +116,18 @@ def later(module: str, name: str) -> Callable[..., Any]:
     return call
 
 
-def _with_user_monitors(build: Callable[[Any], Any]) -> Callable[[Any], Any]:
-    """A family's ``build`` that adds the scene's ``[monitors]`` (:mod:`.user_monitors`) to
-    the model, so that every family offers them without knowing of them."""
+def _with_user_monitors(family: Family) -> Callable[[Any], Any]:
+    """A family's ``build`` that checks the model's names (:func:`.names.check_model`) and adds
+    the scene's ``[monitors]`` (:mod:`.user_monitors`), so that every family offers them
+    without knowing of them."""
+    build = family.build
 
     def call(scene: Any) -> Any:
         from .user_monitors import add_monitors, family_view
 
-        return add_monitors(build(family_view(scene)), scene)
+        model = build(family_view(scene))
+        check_model(model, scene.monitors, family.key_table)
+        return add_monitors(model, scene)
 
     call.__qualname__ = f"with_user_monitors({getattr(build, '__qualname__', build)})"
     return call
@@ -132,73 +149,217 @@ def _with_user_variables(
     return call
 
 
-class _Registry(Mapping[str, Family]):
-    """Family name → :class:`Family`, each imported when first asked for."""
+#: The fields of a family's record that call its package's code.
+_HOOKS = ("parse", "build", "validate", "consistency_check", "closed_form", "plots", "variables")
 
-    def __init__(self) -> None:
-        self._paths: dict[str, str] | None = None
-        self._loaded: dict[str, Family] = {}
 
-    def _known(self) -> dict[str, str]:
-        if self._paths is None:
-            from importlib import metadata
+def _guarded(family: Family, path: str) -> Family:
+    """``family`` (of another package) with each hook's unexpected exception turned into a
+    :class:`SceneError` that names the family and the hook: a fault in that package is one
+    line, not a traceback."""
 
-            paths = dict(_OURS)
-            for ep in metadata.entry_points(group=ENTRY_POINTS):
-                if ep.name in _OURS:
-                    raise SceneError(
-                        "families",
-                        f"the entry point {ep.value!r} registers a family named {ep.name!r}, "
-                        "which is one of cayley_heyoka's own",
-                    )
-                paths[ep.name] = ep.value
-            self._paths = paths
-        return self._paths
-
-    def __getitem__(self, name: str) -> Family:
-        family = self._loaded.get(name)
-        if family is None:
-            path = self._known()[name]
-            module, _, attr = path.partition(":")
+    def guard(hook: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+        def call(*args: Any) -> Any:
             try:
-                family = getattr(import_module(module), attr or "FAMILY")
-            except Exception as exc:  # another package's family failing to load: say which
+                return fn(*args)
+            except (SceneError, IntegrationError):
+                raise
+            except Exception as exc:
                 raise SceneError(
                     "families",
-                    f"the family {name!r} ({path}) cannot be loaded: {type(exc).__name__}: {exc}",
+                    f"the family {family.name!r} ({path}) failed in its {hook}: "
+                    f"{type(exc).__name__}: {exc} (a fault in that package, not in the scene)",
                 ) from exc
-            if not isinstance(family, Family) or family.name != name:
-                raise SceneError("families", f"{path!r} is not the Family {name!r}")
-            family = replace(
-                family,
-                build=_with_user_monitors(family.build),
-                variables=_with_user_variables(family.variables),
+
+        call.__qualname__ = f"guarded({getattr(fn, '__qualname__', fn)})"
+        return call
+
+    hooks: dict[str, Any] = {
+        h: guard(h, fn) for h in _HOOKS if (fn := getattr(family, h)) is not None
+    }
+    return replace(family, **hooks)
+
+
+@dataclass
+class _Entries:
+    """What the registry found: the path of every family it may use, why it refuses the
+    others, and the records loaded so far."""
+
+    paths: dict[str, str]
+    refused: dict[str, str]
+    loaded: dict[str, Family] = field(default_factory=dict)
+    checked: bool = False
+
+
+class _Registry(Mapping[str, Family]):
+    """Family name → :class:`Family`: ours, and the usable families of other packages.
+
+    Ours are imported when first asked for; the others all together, the first time one of
+    them is asked for or the registry is listed, since a family of another package is used
+    only if no other claims its tables.
+    """
+
+    def __init__(self) -> None:
+        self._entries: _Entries | None = None
+
+    def _found(self) -> _Entries:
+        if self._entries is None:
+            from importlib import metadata
+
+            values: dict[str, list[str]] = {}
+            for ep in metadata.entry_points(group=ENTRY_POINTS):
+                values.setdefault(ep.name, [])
+                if ep.value not in values[ep.name]:
+                    values[ep.name].append(ep.value)
+            paths, refused = dict(_OURS), {}
+            for name, found in values.items():
+                if name in _OURS:
+                    refused[name] = (
+                        f"the entry point {found[0]!r} registers a family named {name!r}, which "
+                        "is one of cayley_heyoka's own: it is not used"
+                    )
+                elif len(found) > 1:
+                    refused[name] = (
+                        f"the entry points {', '.join(map(repr, found))} all register a family "
+                        f"named {name!r}: none is used (uninstall all but one)"
+                    )
+                else:
+                    paths[name] = found[0]
+            self._entries = _Entries(paths, refused)
+        return self._entries
+
+    def _load(self, name: str, path: str) -> Family:
+        module, _, attr = path.partition(":")
+        try:
+            family = getattr(import_module(module), attr or "FAMILY")
+        except Exception as exc:  # another package's family failing to load: say which
+            raise SceneError(
+                "families",
+                f"the family {name!r} ({path}) cannot be loaded: {type(exc).__name__}: {exc}",
+            ) from exc
+        if not isinstance(family, Family) or family.name != name:
+            raise SceneError("families", f"{path!r} is not the Family {name!r}")
+        if family.key_table not in family.tables:
+            raise SceneError(
+                "families",
+                f"the family {name!r} ({path}) has the key table [{family.key_table}] outside "
+                f"its tables {list(family.tables)}",
             )
-            self._loaded[name] = family
-        return family
+        if name not in _OURS:
+            family = _guarded(family, path)
+        return replace(
+            family,
+            build=_with_user_monitors(family),
+            variables=_with_user_variables(family.variables),
+        )
+
+    def _check_others(self) -> None:
+        """Load every family of another package, once, and refuse those that fail to load or
+        would take a table from another family.
+
+        A scene's family is the one whose key table it has, so a key table is one family's
+        alone: no other family may have it among its tables, and it is none of the tables
+        every scene has (:data:`.names.SCENE_TABLES`), which no family may have at all. The
+        other tables are read by their family only, and may share a name (our rotation and
+        Hamiltonian families both have ``[initial]``).
+        """
+        entries = self._found()
+        if entries.checked:
+            return
+        entries.checked = True
+        others: dict[str, Family] = {}
+        refused: dict[str, str] = {}
+        for name, path in entries.paths.items():
+            if name not in _OURS:
+                try:
+                    others[name] = self._load(name, path)
+                except SceneError as exc:
+                    refused[name] = exc.constraint
+        ours = {name: self[name] for name in _OURS}
+        for name, family in others.items():
+            path = entries.paths[name]
+            if common := [t for t in family.tables if t in SCENE_TABLES]:
+                refused[name] = (
+                    f"the family {name!r} ({path}) claims the table [{common[0]}] that every "
+                    "scene may have: it is not used"
+                )
+                continue
+            for rival, theirs in [*ours.items(), *others.items()]:
+                if rival == name:
+                    continue
+                if family.key_table in theirs.tables:
+                    table = family.key_table
+                elif theirs.key_table in family.tables:
+                    table = theirs.key_table
+                else:
+                    continue
+                whose = "cayley_heyoka's" if rival in _OURS else "the"
+                refused[name] = (
+                    f"the family {name!r} ({path}) claims the table [{table}], which {whose} "
+                    f"family {rival!r} also has, and a scene names its family by that table: "
+                    f"{name!r} is not used"
+                )
+                break
+            else:
+                entries.loaded[name] = family
+        for name in refused:
+            del entries.paths[name]
+        entries.refused.update(refused)
+
+    def __getitem__(self, name: str) -> Family:
+        entries = self._found()
+        family = entries.loaded.get(name)
+        if family is not None:
+            return family
+        if name in _OURS:
+            family = self._load(name, _OURS[name])
+            entries.loaded[name] = family
+            return family
+        self._check_others()
+        if name in entries.loaded:
+            return entries.loaded[name]
+        if name in entries.refused:
+            raise SceneError("families", entries.refused[name])
+        raise KeyError(name)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._usable()
+
+    def _usable(self) -> list[str]:
+        self._check_others()
+        entries = self._found()
+        return [n for n in entries.paths if n in _OURS or n in entries.loaded]
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self._known())
+        return iter(self._usable())
 
     def __len__(self) -> int:
-        return len(self._known())
+        return len(self._usable())
+
+    def refused(self) -> list[str]:
+        """Why each family of another package that is not used is not (one line each)."""
+        self._check_others()
+        return list(self._found().refused.values())
 
 
-FAMILIES: Mapping[str, Family] = _Registry()
+_REGISTRY = _Registry()
+FAMILIES: Mapping[str, Family] = _REGISTRY
+
+
+def refused_families() -> list[str]:
+    """Why each installed family of another package is not used, one line each (none when
+    every one is)."""
+    return _REGISTRY.refused()
 
 
 def family_of(data: Mapping[str, Any]) -> str:
     """The family whose identifying table the scene has.
 
-    A family of another package that fails to load does not stop scenes of the others; it is
-    named in the error when no loaded family claims the scene.
+    A family of another package that is not used (it fails to load, or claims a table that is
+    not its own: :class:`_Registry`) does not stop scenes of the others; it is named in the
+    error when no family claims the scene.
     """
-    families, broken = [], []
-    for name in FAMILIES:
-        try:
-            families.append(FAMILIES[name])
-        except SceneError as exc:
-            broken.append(exc.constraint)
+    families = [FAMILIES[name] for name in FAMILIES]
     found = [f.name for f in families if f.key_table in data]
     if len(found) == 1:
         return found[0]
@@ -210,7 +371,7 @@ def family_of(data: Mapping[str, Any]) -> str:
             "(in Python, `run_sweep`)",
         )
     if not found:
-        also = "".join(f"; {b}" for b in broken)
+        also = "".join(f"; {b}" for b in refused_families())
         raise SceneError(
             "scene", f"names no model family; expected one of the tables {expected}{also}"
         )

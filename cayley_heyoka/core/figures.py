@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .labelled import to_double
+
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
@@ -38,9 +40,13 @@ def refuse(kind: str, why: str) -> PlotError:
     return PlotError(f"kind {kind!r} {why}")
 
 
-def as_float(a: Any) -> np.ndarray:
-    """Plot coordinates: any precision's numbers as float64 (real128 and real convert)."""
-    return np.asarray(a, dtype=np.float64)
+def as_float(a: Any, name: str = "a plotted quantity") -> np.ndarray:
+    """Plot coordinates: any precision's numbers as float64 (real128 and real convert), or a
+    :class:`PlotError` for one beyond double's range (:func:`.labelled.to_double`)."""
+    try:
+        return to_double(a, name, "a plot draws doubles")
+    except ValueError as exc:
+        raise PlotError(str(exc)) from None
 
 
 def pyplot_figure(size: tuple[float, float]) -> Figure:

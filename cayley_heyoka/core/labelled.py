@@ -16,9 +16,12 @@ when a view is asked for (``pip install "cayley_heyoka[xarray]"``).
 from __future__ import annotations
 
 import json
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from .names import COMPONENTS, columns, component_dim
 
 if TYPE_CHECKING:  # only for annotations: the views import them when called
     import pandas as pd
@@ -27,9 +30,6 @@ if TYPE_CHECKING:  # only for annotations: the views import them when called
 #: What the views take: a :class:`~cayley_heyoka.core.result.Result` (not imported here, so
 #: that the result module may import this one).
 Result = Any
-
-#: Labels of the ``component`` dimension of three-vectors (space axes), as in the files.
-COMPONENTS = ("x", "y", "z")
 
 
 def require(module: str) -> Any:
@@ -45,11 +45,49 @@ def require(module: str) -> Any:
         ) from exc
 
 
-def values(arr: np.ndarray, precision: Any, as_double: bool) -> np.ndarray:
-    """``arr`` as the view holds it: float64 in double or when asked, else the exact numbers."""
-    if precision.kind == "double" or as_double:
+def values(arr: np.ndarray, precision: Any, as_double: bool, name: str) -> np.ndarray:
+    """``arr`` (the values of ``name``) as the view holds it: float64 in double or when asked
+    (:func:`to_double`), else the exact numbers."""
+    if precision.kind == "double":
         return np.asarray(arr, dtype=np.float64)
+    if as_double:
+        hint = "as_double=True cannot hold it (the exact view, as_double=False, can)"
+        return to_double(arr, f"{name} in {precision.name}", hint)
     return np.asarray(arr, dtype=object)
+
+
+#: Number types that float64 holds exactly (heyoka's real128 and real are numpy floats too).
+_NARROW = (np.float16, np.float32, np.float64)
+
+
+def to_double(arr: Any, name: str, hint: str = "") -> np.ndarray:
+    """``arr``'s numbers, of any precision, each rounded to the nearest float64.
+
+    A finite number beyond double's range (|x| ≥ 2¹⁰²⁴, ~1.8e308) has no nearest double: it
+    raises instead of becoming ±inf. One below double's smallest (~4.9e-324) rounds to the
+    nearest double, 0 or a subnormal, as every rounding does (an absolute error of at most
+    half the smallest subnormal). NaN and ±inf stay as they are.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the first such number and where it is (then ``hint``).
+    """
+    given = np.asarray(arr)
+    if given.dtype.kind in "biu" or any(given.dtype == t for t in _NARROW):
+        return np.asarray(given, dtype=np.float64)
+    with np.errstate(over="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an overflow is reported below
+        out = np.asarray(given, dtype=np.float64)
+    for i in np.flatnonzero(np.isinf(out)):
+        value = given.flat[i]
+        if value - value == 0:  # finite: x − x is NaN for ±inf
+            at = ", ".join(map(str, np.unravel_index(i, given.shape)))
+            raise ValueError(
+                f"{name}: [{at}] is {value}, beyond double's range (±1.8e308)"
+                + (f": {hint}" if hint else "")
+            )
+    return out
 
 
 def precision_attrs(precision: Any, as_double: bool) -> dict[str, str]:
@@ -58,11 +96,6 @@ def precision_attrs(precision: Any, as_double: bool) -> dict[str, str]:
     if precision.kind != "double" and as_double:
         return {"precision": "double", "rounded_from": precision.name}
     return {"precision": precision.name}
-
-
-def component_dim(size: int) -> str:
-    """The dimension of a ``size``-vector's components, named as in the result files."""
-    return "component" if size == len(COMPONENTS) else f"component_{size}"
 
 
 def variable_attrs(result: Result, name: str, role: str) -> dict[str, str]:
@@ -86,7 +119,7 @@ def result_dataset(result: Result, *, as_double: bool = False) -> xr.Dataset:
     xr = require("xarray")
     prec = result.precision
     coords: dict[str, Any] = {
-        "time": ("time", values(result.t, prec, as_double), time_attrs(result))
+        "time": ("time", values(result.t, prec, as_double, "time"), time_attrs(result))
     }
     data: dict[str, Any] = {}
     for role, arrays in (("variable", result.variables), ("monitor", result.monitors)):
@@ -97,7 +130,8 @@ def result_dataset(result: Result, *, as_double: bool = False) -> xr.Dataset:
                 dims = ("time", dim)
                 if dim == "component":
                     coords["component"] = ("component", list(COMPONENTS))
-            data[name] = (dims, values(arr, prec, as_double), variable_attrs(result, name, role))
+            view = values(arr, prec, as_double, name)
+            data[name] = (dims, view, variable_attrs(result, name, role))
     attrs = {
         "title": str(result.scene.get("title") or ""),
         **precision_attrs(prec, as_double),
@@ -117,18 +151,17 @@ def result_frame(result: Result, *, as_double: bool = False) -> pd.DataFrame:
     monitor (a vector monitor's components as ``NAME_x``, ``NAME_y``, ``NAME_z``)."""
     pd = require("pandas")
     prec = result.precision
-    columns: dict[str, np.ndarray] = {}
+    table: dict[str, np.ndarray] = {}
     for arrays in (result.variables, result.monitors):
         for name, arr in arrays.items():
-            v = values(arr, prec, as_double)
-            if v.ndim > 1:
-                labels = COMPONENTS if v.shape[1] == len(COMPONENTS) else range(v.shape[1])
-                for i, label in enumerate(labels):
-                    columns[f"{name}_{label}"] = v[:, i]
-            else:
-                columns[name] = v
-    index = pd.Index(values(result.t, prec, as_double), name="time")
-    frame = pd.DataFrame(columns, index=index)
+            v = values(arr, prec, as_double, name)
+            flat = v.reshape(v.shape[0], int(np.prod(v.shape[1:])))
+            for i, label in enumerate(columns(name, v.shape[1:])):
+                if label in table or label == "time":
+                    raise ValueError(f"two columns of the table would be named {label!r}")
+                table[label] = flat[:, i]
+    index = pd.Index(values(result.t, prec, as_double, "time"), name="time")
+    frame = pd.DataFrame(table, index=index)
     frame.attrs.update(precision_attrs(prec, as_double))
     return frame
 
@@ -140,7 +173,7 @@ def events_frame(result: Result, *, as_double: bool = False) -> pd.DataFrame:
     prec = result.precision
     rows = []
     for name, log in result.events.items():
-        times = values(log.time, prec, as_double)
+        times = values(log.time, prec, as_double, f"events.{name}.time")
         for when, direction, label in zip(times, log.direction, log.label, strict=True):
             rows.append((name, when, int(direction), str(label)))
     rows.sort(key=lambda row: float(row[1]))

@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from .files import FORMAT_VERSION, FORMATS, open_ours, write_hdf5
-from .labelled import COMPONENTS, component_dim, time_attrs, variable_attrs
+from .labelled import time_attrs, variable_attrs
+from .names import COMPONENTS, component_dim, layout_holder, name_problem
 from .precision import Precision
 
 
@@ -241,12 +242,7 @@ class Result:
         arrays are decimal text (attribute ``encoding = "decimal"``), exact.
         """
         prec = self.precision
-        clash = sorted(set(LAYOUT_NAMES) & {*self.variables, *self.monitors})
-        if clash:
-            raise ValueError(
-                f"an output or monitor is named {', '.join(map(repr, clash))}, which the result "
-                f"file's layout keeps for itself ({', '.join(LAYOUT_NAMES)})"
-            )
+        check_names(self)
         f.attrs["format"] = FORMATS["result"]
         f.attrs["format_version"] = FORMAT_VERSION
         f.attrs["Conventions"] = "CF-1.10"
@@ -294,15 +290,16 @@ class Result:
 
     def describe(self, name: str) -> str | None:
         """What the variable or monitor ``name`` is, in its family's words (None if the family
-        does not say, or is not installed here)."""
+        does not say, is not installed here, or fails to say: a description is a label, and
+        a result is saved without it)."""
         from .errors import SceneError
         from .families import FAMILIES, family_of
 
         try:
             family = FAMILIES[family_of(self.scene)]
+            return family.variables(self.scene, name) if family.variables is not None else None
         except SceneError:
             return None
-        return family.variables(self.scene, name) if family.variables is not None else None
 
     def unit(self, name: str) -> str | None:
         """The unit the scene gives ``name`` (``"time"`` for the times) in ``output.units``."""
@@ -363,8 +360,20 @@ class Result:
             )
 
 
-#: Names the result file's layout takes for itself beside the outputs and monitors.
-LAYOUT_NAMES = ("time", "component", "events", "certificate")
+def check_names(result: Result) -> None:
+    """Refuse, before writing, a result whose names a file cannot hold (one built in Python:
+    a run's names were checked when its scene was, :mod:`.names`)."""
+    if twice := sorted(set(result.variables) & set(result.monitors)):
+        raise ValueError(f"{twice[0]!r} is both a variable and a monitor: a file holds one")
+    for kind, names in (
+        ("output or monitor", [*result.variables, *result.monitors]),
+        ("event", list(result.events)),
+    ):
+        for name in names:
+            if problem := name_problem(name):
+                raise ValueError(f"the {kind} {name!r} cannot be saved: {problem}")
+            if kind != "event" and (holder := layout_holder(name)):
+                raise ValueError(f"the {kind} {name!r} cannot be saved: it is {holder}")
 
 
 def label(ds: Any, long_name: str | None, units: str | None = None) -> None:

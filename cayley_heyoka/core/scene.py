@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from .errors import OptionError, SceneError
+from .names import SCENE_TABLES, check_scene, name_problem
 from .precision import (
     NUMBER_KINDS,
     Number,
@@ -493,8 +494,8 @@ def parse_monitors(table: Any) -> dict[str, UserMonitor]:
     out = {}
     for name, spec in table.items():
         where = f"monitors.{name}"
-        if not isinstance(name, str) or not name.isidentifier() or name.startswith("_"):
-            raise SceneError(where, "a monitor's name must be an identifier (letters, digits, _)")
+        if problem := name_problem(name):
+            raise SceneError(where, problem)
         if not isinstance(spec, Mapping):
             raise SceneError(where, f'must be a table {{expression = "…"}}, got {spec!r}')
         check_keys(spec, ["expression", "conserved"], where)
@@ -548,8 +549,7 @@ class Scene:
             raise SceneError("scene", f"must be a table, got {type(data).__name__}")
         family = family_of(data)
         spec = FAMILIES[family]
-        generic = ["title", "integrator", "output", "events", "monitors"]
-        check_keys(data, [*generic, *spec.tables], "")
+        check_keys(data, [*SCENE_TABLES, *spec.tables], "")
         title = data.get("title", "")
         if not isinstance(title, str):
             raise SceneError("title", f"must be a string, got {title!r}")
@@ -561,6 +561,7 @@ class Scene:
                 raise SceneError("events", "must be a table of [events.NAME] tables")
             events = {n: UserEvent.parse(n, t) for n, t in events_table.items()}
             monitors = parse_monitors(data.get("monitors", {}))
+            check_scene(monitors, events, spec.name, spec.events)
             model = spec.parse({k: data[k] for k in spec.tables if k in data})
         # Every number as written, in the run's precision, before any other use of it.
         precision = integrator.precision

@@ -39,7 +39,8 @@ def family_view(scene: Any) -> Any:
 
 
 def add_monitors(model: Model, scene: Any) -> Model:
-    """``model`` with the scene's user monitors, parsed over its outputs and parameters."""
+    """``model`` with the scene's user monitors, parsed over its outputs and parameters (their
+    names are checked first, with the model's: :func:`.names.check_model`)."""
     if not scene.monitors:
         return model
     wanted = scene.output.monitors
@@ -49,8 +50,6 @@ def add_monitors(model: Model, scene: Any) -> Model:
     symbols.update(model.outputs)
     for name, monitor in scene.monitors.items():
         where = f"monitors.{name}"
-        if name in model.monitors or name in model.outputs:
-            raise SceneError(where, f"{name!r} is already an output or monitor of this model")
         if wanted is not None and name not in wanted:
             raise SceneError(where, "is defined but not listed in output.monitors")
         expr = parse_expression(monitor.expression, symbols, model.pars, f"{where}.expression")

@@ -15,6 +15,7 @@ FAMILY = Family(
     plot_kinds=("orbit",),
     plots=later("cayley_heyoka.orbit.plots", "plots"),
     variables=later("cayley_heyoka.orbit.variables", "describe"),
+    events=("node", "apsis", "equatorial"),
     formulations=("orbit.formulation", ("cartesian", "cayley", "quaternion", "encke")),
     memoirs=("cayley1860",),
 )

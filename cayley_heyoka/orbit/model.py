@@ -42,6 +42,7 @@ from .disturbing import (
 )
 from .encke import STATE as ENCKE
 from .encke import Encke
+from .family import FAMILY
 from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
 from .tilt import (
@@ -57,7 +58,8 @@ from .tilt import (
 CARTESIAN = ("x", "y", "z", "vx", "vy", "vz")
 CAYLEY = ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi")
 QUATERNION = ("qw", "qx", "qy", "qz")
-EVENTS = ("node", "apsis", "equatorial")
+#: The events the family offers (its record, :data:`.family.FAMILY`, declares them).
+EVENTS = FAMILY.events
 _GUARD_DIGITS = 15
 
 

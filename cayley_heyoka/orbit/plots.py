@@ -71,7 +71,7 @@ def _position(result: Result) -> np.ndarray:
             f"needs the position x, y, z of an orbit result (missing: {', '.join(missing)}; "
             f"variables: {have})",
         )
-    return np.array([as_float(result.variables[k]) for k in ("x", "y", "z")])
+    return np.array([as_float(result.variables[k], k) for k in ("x", "y", "z")])
 
 
 def _orbit_3d(ax: Axes, result: Result) -> None:
@@ -90,7 +90,7 @@ def _orbit_3d(ax: Axes, result: Result) -> None:
 
 def _orbit_figure(fig: Figure, result: Result) -> Axes:
     xyz = _position(result)
-    t = as_float(result.t)
+    t = as_float(result.t, "time")
     have = result.variables
     panels = ["r"] + [k for k in ("h", "Theta", "Phi") if k in have]
     grid = beside_3d(fig, len(panels), 1.3)
@@ -100,12 +100,12 @@ def _orbit_figure(fig: Figure, result: Result) -> Axes:
     for row, panel in enumerate(panels):
         side = fig.add_subplot(grid[row, 1], sharex=side)
         if panel == "r":
-            r = as_float(have["r"]) if "r" in have else np.linalg.norm(xyz, axis=0)
+            r = as_float(have["r"], "r") if "r" in have else np.linalg.norm(xyz, axis=0)
             side.plot(t, r, color="C0", lw=1.0)
             _apsides(side, result, t, r)
             side.set_ylabel("r = |x|")
         else:
-            side.plot(t, as_float(have[panel]), color=_ORBIT_PANELS[panel][1], lw=1.0)
+            side.plot(t, as_float(have[panel], panel), color=_ORBIT_PANELS[panel][1], lw=1.0)
             side.set_ylabel(_ORBIT_PANELS[panel][0])
         side.grid(True, alpha=0.3)
         side.tick_params(labelbottom=row == len(panels) - 1)

@@ -25,6 +25,7 @@ FAMILY = Family(
         "Euler1758": "cayley_heyoka.rotation.euler1758",
         "Cayley1846": "cayley_heyoka.rotation.cayley1846",
     },
+    events=("invariable_plane",),
     formulations=("attitude.formulation", ("quaternion", "rodrigues", "poisson")),
     memoirs=("cayley1843", "cayley1846", "euler1758"),
 )

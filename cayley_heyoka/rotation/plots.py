@@ -49,7 +49,7 @@ def _rates(result: Result, kind: str) -> tuple[np.ndarray, np.ndarray]:
     missing = [k for k in ("p", "q", "r") if k not in result.variables]
     if missing:
         raise refuse(kind, f"needs the body rates p, q, r (missing: {', '.join(missing)})")
-    rates = np.array([as_float(result.variables[k]) for k in ("p", "q", "r")])
+    rates = np.array([as_float(result.variables[k], k) for k in ("p", "q", "r")])
     inertia = np.array([float(x) for x in result.scene["body"]["inertia"]])
     return rates, inertia
 
@@ -170,7 +170,7 @@ def crossings(result: Result, ax: Axes | None = None) -> Axes:
             f'{recorded}); add output.events = ["invariable_plane"] to the scene and run again',
         )
     ax = ax if ax is not None else pyplot_figure(SIZES["crossings"]).add_subplot()
-    t = as_float(result.t)
+    t = as_float(result.t, "time")
     momentum = inertia[:, None] * rates
     sines = momentum / np.linalg.norm(momentum, axis=0)
     times = as_float(log.time)

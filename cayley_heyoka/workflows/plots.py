@@ -137,7 +137,7 @@ def drift_of(result: Result) -> dict[str, np.ndarray]:
         )
     out = {}
     for name in result.conserved:
-        d = np.abs(as_float(result.drift(name)))
+        d = np.abs(as_float(result.drift(name), f"the drift of {name}"))
         out[name] = d.max(axis=1) if d.ndim > 1 else d
     return out
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..core.files import FORMAT_VERSION, FORMATS, open_ours, write_hdf5
+from ..core.names import SWEEP_FILE
 from ..core.precision import Precision
 from ..core.result import source_line
 from ..core.scene import Scene
@@ -151,7 +152,7 @@ class SweepResult:
         xr = require("xarray")
         prec = self.precision
         coords: dict[str, Any] = {
-            "time": ("time", values(self.t, prec, as_double), {"long_name": "time"}),
+            "time": ("time", values(self.t, prec, as_double, "time"), {"long_name": "time"}),
             "member": ("member", np.arange(len(self)), {"long_name": "member of the sweep"}),
             "monitor": ("monitor", list(self.drift)),
             "variable": ("variable", list(self.final_names)),
@@ -160,7 +161,7 @@ class SweepResult:
         for name, column in self.parameters.items():
             coords[name] = (
                 "member",
-                values(column, prec, as_double),
+                values(column, prec, as_double, name),
                 {"long_name": f"swept parameter {name}"},
             )
         n, m = len(self), len(self.t)
@@ -168,7 +169,10 @@ class SweepResult:
         counts = np.stack(list(self.events.values()), axis=1) if self.events else np.zeros((n, 0))
         data = {
             "drift": (("monitor", "member", "time"), drift),
-            "final_state": (("member", "variable"), values(self.final_state, prec, as_double)),
+            "final_state": (
+                ("member", "variable"),
+                values(self.final_state, prec, as_double, "final_state"),
+            ),
             "status": ("member", np.asarray(self.status, dtype=np.int8)),
             "message": ("member", np.asarray(self.message, dtype=str)),
             "steps": ("member", np.asarray(self.steps, dtype=np.int64)),
@@ -212,7 +216,7 @@ class SweepResult:
         pd = require("pandas")
         prec = self.precision
         columns: dict[str, Any] = {
-            name: values(column, prec, as_double) for name, column in self.parameters.items()
+            name: values(column, prec, as_double, name) for name, column in self.parameters.items()
         }
         columns.update(
             status=np.asarray(self.status, dtype=np.int8),
@@ -462,11 +466,6 @@ LONG_NAMES = {
     "steps": "Taylor steps",
     "events": "occurrences of each recorded event",
 }
-#: Names the sweep file's layout takes for itself (a swept parameter may not take one).
-LAYOUT_NAMES = (
-    "time", "member", "monitor", "variable", "event", "drift", "final_state", "status",
-    "message", "steps", "events",
-)  # fmt: skip
 
 
 def _create(f: Any, result: SweepResult) -> None:
@@ -477,7 +476,7 @@ def _create(f: Any, result: SweepResult) -> None:
 
     prec = result.precision
     names = list(result.parameters)
-    if clash := sorted(set(LAYOUT_NAMES) & set(names)):
+    if clash := sorted(set(SWEEP_FILE) & set(names)):
         raise ValueError(
             f"a swept parameter is named {', '.join(map(repr, clash))}, which the sweep file's "
             "layout keeps for itself"
