@@ -15,11 +15,20 @@ from typing import Any
 import numpy as np
 
 from .certificate import Certificate, worst
-from .precision import Precision
+from .precision import Number, Precision
 from .scene import Scene
 
 
-def with_precision(scene: Scene, prec: Precision, tolerance: str | None) -> Scene:
+def with_precision(scene: Scene, prec: Precision, tolerance: Number | None) -> Scene:
+    """The same scene in ``prec`` with ``tolerance`` (None: ``"auto"``, the precision's own),
+    every other option kept: the one way a reference, a closed form's job and the planner's
+    routes change a scene's precision.
+
+    Raises
+    ------
+    SceneError
+        A number or the tolerance that ``prec`` cannot take.
+    """
     data = scene.to_dict()
     integ = dict(data.get("integrator", {}))
     integ["precision"] = prec.to_spec()

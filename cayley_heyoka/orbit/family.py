@@ -16,5 +16,6 @@ FAMILY = Family(
     plots=later("cayley_heyoka.orbit.plots", "plots"),
     variables=later("cayley_heyoka.orbit.variables", "describe"),
     formulations=("orbit.formulation", ("cartesian", "cayley", "quaternion", "encke")),
+    with_formulation=later("cayley_heyoka.orbit.scene", "with_formulation"),
     memoirs=("cayley1860",),
 )

@@ -26,5 +26,6 @@ FAMILY = Family(
         "Cayley1846": "cayley_heyoka.rotation.cayley1846",
     },
     formulations=("attitude.formulation", ("quaternion", "rodrigues", "poisson")),
+    with_formulation=later("cayley_heyoka.rotation.scene", "with_formulation"),
     memoirs=("cayley1843", "cayley1846", "euler1758"),
 )
