@@ -220,7 +220,7 @@ class Plan:
             if not r.runnable:
                 mark = "  over integrator.max_steps"
             lines.append(
-                f"{r.formulation or '(scene)':<14} {r.precision:<9} {r.tolerance:<10.10} "
+                f"{r.formulation or '(scene)':<14} {r.precision:<9} {r.tolerance:<10} "
                 f"{r.steps:>14,} {r.state:>10.1e} {r.invariants:>10.1e} "
                 f"{_seconds(r.seconds):>10}{mark}"
             )
@@ -266,15 +266,21 @@ def plan(
         A bad ``error``, ``quantity`` or ``formulations`` (a ValueError naming it).
     ValueError
         A scene no route could pilot (:class:`SceneError` for the scene's own fields).
+    TypeError
+        ``scene`` is not a :class:`Scene`.
     """
+    from ..core.engine import model_of
+
+    if not isinstance(scene, Scene):
+        raise TypeError(
+            f"scene: must be a Scene (Scene.from_dict, load_scene), got {type(scene).__name__}"
+        )
     family = FAMILIES[scene.family]
     own = family.formulation_of(scene)
-    key, offered = family.formulations or (None, (None,))
+    _, offered = family.formulations or (None, (None,))
     if own not in offered:
         offered = (own, *offered)
     offered = _chosen(formulations, offered)
-    from ..core.engine import model_of
-
     conserved = tuple(model_of(scene).conserved)
     wanted = _request(error, quantity, conserved)
     grid = scene.output.time_grid(scene.integrator.precision)
@@ -319,8 +325,8 @@ def _chosen(formulations: Sequence[str] | None, offered: tuple) -> tuple:
 
 
 def _request(error: Any, quantity: str, conserved: tuple[str, ...]) -> float:
-    """The request checked: ``error`` as a double (> 0, held by a double exactly enough to
-    compare), ``quantity`` one that the scene has."""
+    """The request checked: ``error`` as a double (a number > 0 in a double's range, read
+    exactly first), ``quantity`` one that the scene has."""
     if not isinstance(quantity, str) or quantity not in QUANTITIES:
         raise RequestError("quantity", f"must be one of {QUANTITIES}, got {quantity!r}")
     if quantity == "invariants" and not conserved:
