@@ -499,8 +499,12 @@ def _pilot(scene: Scene, family: Family, formulation: str | None, span: float) -
 def _rate(scene: Scene, start: Number, span: float) -> float:
     """Steps per unit time over the first :data:`PROBE_STEPS` steps: stretches growing
     eightfold from span/2²⁰ until one needs more steps (the engine refuses a stretch whose
-    first steps show it needs more than ten times its budget)."""
-    stretch = span / 2**20
+    first steps show it needs more than ten times its budget), or until the stretch that
+    the scene's ``integrator.max_step`` lets a probe's budget cover (the engine refuses a
+    longer one)."""
+    step = scene.integrator.max_step
+    cap = span if step is None else min(span, PROBE_STEPS / 2 * float(exact_fraction(step)))
+    stretch = min(span / 2**20, cap)
     while True:
         whole = stretch >= span
         probe = _window(
@@ -517,13 +521,13 @@ def _rate(scene: Scene, start: Number, span: float) -> float:
                 f"{10 * PROBE_STEPS} steps: {10 * PROBE_STEPS * span / stretch:.2g} or more over "
                 "the span"
             ) from None
-        if result.status != 0 or whole:
+        if result.status != 0 or stretch >= cap:
             t0 = float(probe.output.time_grid(probe.integrator.precision)[0])
             reached = (times[-1] if times else t0) - t0
             if not reached > 0:
                 raise _Unfit("the probe did not advance")
             return len(times) / reached
-        stretch = min(span, 8 * stretch)
+        stretch = min(cap, 8 * stretch)
 
 
 def _recorded(scene: Scene) -> tuple[Any, list[float]]:

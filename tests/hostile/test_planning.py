@@ -167,6 +167,18 @@ def test_a_span_far_from_zero_is_planned_as_run_runs_it(hostile):
     assert steps == ch.run(ch.load_scene(scene)).counters["steps"]
 
 
+@pytest.mark.covers("verb:plan", "key:integrator.max_step", "class:3")
+def test_a_scene_with_a_max_step_is_piloted(hostile):
+    """max_step = 0.001 makes 500 steps of t = 0.5: the probe of the rate of steps stays within
+    what its budget can cover (a longer one is refused by the engine), and the plan predicts
+    the run's steps."""
+    short = {"times": {"start": 0, "stop": 0.5, "count": 3}}
+    scene = hostile.scene({**RATES, "output": short, "integrator": {"max_step": 0.001}})
+    out = hostile.run(["plan", str(scene), "--error", "1e-8"], expect="done")
+    steps = int(_row(out.stdout, "none", "double")[3].replace(",", ""))
+    assert abs(steps / ch.run(ch.load_scene(scene)).counters["steps"] - 1) < 0.01
+
+
 @pytest.mark.covers("verb:check", "key:output.azimuth", "key:attitude.formulation", "class:3")
 def test_check_of_a_reduced_body_with_its_azimuth(hostile):
     """The quaternion twin carries the whole attitude: the reduction's rates, γ and its
