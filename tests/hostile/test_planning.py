@@ -190,11 +190,17 @@ def test_check_of_a_reduced_body_with_its_azimuth(hostile):
 
 @pytest.mark.covers("verb:plan", "option:plan --quantity", "class:12")
 def test_invariants_of_a_scene_that_conserves_nothing(hostile):
+    """Refused before any pilot, on the command line and by ``for_error`` of a plan of the
+    state (whose routes have no drift to predict)."""
     hostile.run(
         ["plan", str(hostile.scene(UNCONSERVED)), "--error", "1e-8", "--quantity", "invariants"],
         expect="refused",
         field="--quantity: 'invariants' bounds the drift of the conserved quantities",
     )
+    p = planner.plan(ch.Scene.from_dict(UNCONSERVED), 1e-8, formulations=["cartesian"])
+    assert p.conserved == () and p.recommended is not None
+    with pytest.raises(ValueError, match="^quantity: 'invariants' bounds"):
+        p.for_error(1e-8, "invariants")
 
 
 @pytest.mark.covers("verb:plan", "option:plan --error", "class:10")
