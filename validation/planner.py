@@ -5,7 +5,8 @@ Run:  python validation/planner.py [--out validation/PLANNER.md]
 For each case, :func:`cayley_heyoka.workflows.planner.plan` pilots the scene (2000 steps in each
 formulation, double and quad) and predicts, for the whole span, the steps, the state error, the
 drift of the conserved quantities and the wall time of every route. Each route is then run over
-the whole span:
+the whole span, as the plan builds it (``Plan.scene_for``: the route's formulation, precision and
+tolerance, every other option the scene's):
 
 * double routes: the state error against the same formulation in quad over the same span (the
   largest relative difference of the output variables, each scaled by its largest magnitude —
@@ -26,6 +27,7 @@ import math
 import platform
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import heyoka as hy
@@ -33,7 +35,9 @@ import numpy as np
 from orbit_cases import J2_ORBIT
 
 import cayley_heyoka as ch
+from cayley_heyoka.core.closed_form import with_precision
 from cayley_heyoka.core.families import FAMILIES
+from cayley_heyoka.core.precision import Precision
 from cayley_heyoka.workflows import planner
 
 HERE = Path(__file__).resolve().parent
@@ -83,12 +87,9 @@ SHORT = "free body, generic (1, 2, 3)", 200.0  # the quad errors, against 160 bi
 OUTPUTS = 101
 
 
-def scene(d: dict, span: float, formulation: str | None, precision) -> ch.Scene:
+def scene(d: dict, span: float, precision) -> ch.Scene:
     d = {**d, "integrator": {"precision": precision}}
     d["output"] = {"times": {"start": 0, "stop": span, "count": OUTPUTS}}
-    if formulation is not None:
-        table, key = ("orbit", "formulation") if "orbit" in d else ("attitude", "formulation")
-        d[table] = {**d[table], key: formulation}
     return ch.Scene.from_dict(d)
 
 
@@ -111,17 +112,20 @@ def drift(result: ch.Result) -> float:
 
 
 def measure(name: str, d: dict, span: float) -> list[dict]:
-    p = planner.plan(scene(d, span, None, "double"), 1e-12)
+    """Every route of the case's plan run whole: each as the plan builds it
+    (:meth:`~cayley_heyoka.workflows.planner.Plan.scene_for`), its truth the same formulation
+    in quad."""
+    p = planner.plan(scene(d, span, "double"), 1e-12)
     rows = []
     truths: dict = {}
     for route in p.routes:
         f = route.formulation
         if f not in truths:
-            truths[f] = timed(scene(d, span, f, "quad"), repeats=1)
+            truths[f] = timed(p.scene_for(replace(route, precision="quad")), repeats=1)
         truth, quad_wall = truths[f]
         row = {"case": name, "route": route, "refused": p.refused}
         if route.precision == "double":
-            s = scene(d, span, f, "double")
+            s = p.scene_for(route)
             result, wall = timed(s)
             skip = FAMILIES[s.family].build(s).unbounded  # as the planner leaves them out
             row.update(
@@ -140,13 +144,13 @@ def measure(name: str, d: dict, span: float) -> list[dict]:
 def quad_errors() -> list[dict]:
     name, span = SHORT
     d, _ = CASES[name]
-    p = planner.plan(scene(d, span, None, "quad"), 1e-30)
+    p = planner.plan(scene(d, span, "quad"), 1e-30)
     rows = []
     for route in (r for r in p.routes if r.precision == "quad"):
-        s = scene(d, span, route.formulation, "quad")
+        s = p.scene_for(route)
         result = ch.run(s)
         skip = FAMILIES[s.family].build(s).unbounded
-        truth = ch.run(scene(d, span, route.formulation, {"bits": 160}))
+        truth = ch.run(with_precision(s, Precision.from_spec({"bits": 160}), None))
         rows.append(
             {
                 "case": f"{name}, t = {span:g}",

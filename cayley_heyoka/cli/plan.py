@@ -19,7 +19,9 @@ def add_parser(subparsers: Any) -> None:
     )
     p.add_argument("scene", type=Path, help="scene TOML file")
     p.add_argument(
-        "--error", type=float, required=True, help="the relative error wanted at the end"
+        "--error",
+        required=True,
+        help="the relative error wanted at the end (a decimal number > 0, read exactly)",
     )
     p.add_argument(
         "--quantity",
@@ -43,9 +45,13 @@ def command(args: argparse.Namespace) -> int:
         return _plan(args)
 
 
+#: The option of each argument of :func:`~cayley_heyoka.workflows.planner.plan`.
+_OPTIONS = {"error": "--error", "quantity": "--quantity", "formulations": "--formulation"}
+
+
 def _plan(args: argparse.Namespace) -> int:
     from ..core.scene import load_scene
-    from ..workflows.planner import plan
+    from ..workflows.planner import RequestError, plan
 
     try:
         scene = load_scene(args.scene)
@@ -56,7 +62,10 @@ def _plan(args: argparse.Namespace) -> int:
             args.formulation,
             progress=lambda line: print(line, file=sys.stderr),
         )
-    except ValueError as exc:  # SceneError, a bad request, nothing could be piloted
+    except RequestError as exc:  # the command line's fault, not the scene's
+        print(f"error: {_OPTIONS[exc.parameter]}: {exc.rule}", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # SceneError, nothing could be piloted
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
     print(result.text())

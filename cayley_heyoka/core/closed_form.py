@@ -20,9 +20,16 @@ from .scene import Scene, with_options
 
 
 def with_precision(scene: Scene, prec: Precision, tolerance: Any = None) -> Scene:
-    """``scene`` in ``prec`` with ``tolerance`` (None: the precision's epsilon), checked as
-    the scene's own fields are; a refusal names ``precision`` or ``tolerance``
-    (:class:`~cayley_heyoka.core.errors.OptionError`)."""
+    """``scene`` in ``prec`` with ``tolerance`` (None: ``"auto"``, the precision's epsilon),
+    every other option kept and checked as the scene's own fields are: the one way a
+    reference, a closed form's job and the planner's routes change a scene's precision.
+
+    Raises
+    ------
+    OptionError
+        A number or the tolerance that ``prec`` cannot take, naming ``precision`` or
+        ``tolerance`` (:class:`~cayley_heyoka.core.errors.OptionError`).
+    """
     return with_options(
         scene,
         {

@@ -480,7 +480,7 @@ class Propagation:
 
         A span of 1e300 would otherwise spend the whole budget (10⁹ steps: many minutes)
         before stopping. The rate of the first steps (those of a probing call, at most
-        :data:`_PROBES`) extrapolated over the span must stay within :data:`_ESTIMATE_MARGIN`
+        :data:`_PROBES`) extrapolated over the span must stay within :data:`ESTIMATE_MARGIN`
         times the budget; the margin leaves room for motions whose steps lengthen (an
         estimate, so only the absurd is refused). The first probe is short, so that a run
         pays for it a few steps only: when its estimate is not :data:`_CLEAR` times inside
@@ -493,7 +493,7 @@ class Propagation:
         needed = self._needed(steps, reached) if steps >= _PROBES[0] else None
         if needed is None:
             return
-        limit = _ESTIMATE_MARGIN * budget
+        limit = ESTIMATE_MARGIN * budget
         if cut and probes and needed * _CLEAR > limit:
             return  # not clearly within the budget: the next, longer probe decides
         probes.clear()
@@ -502,7 +502,7 @@ class Propagation:
             raise SceneError(
                 "output.times",
                 f"the span to t = {last} needs about {approx(needed)} steps (the first "
-                f"{steps} reached t = {reached[0]}), more than {_ESTIMATE_MARGIN} times the "
+                f"{steps} reached t = {reached[0]}), more than {ESTIMATE_MARGIN} times the "
                 f"step budget integrator.max_steps = {budget}; shorten the span, or raise "
                 "integrator.max_steps if the steps will lengthen",
             )
@@ -666,10 +666,10 @@ class Propagation:
 #: Steps at most of a run's probing calls (a run that needs more starts again after each, so
 #: that its bits do not depend on the cut; :meth:`Propagation._estimate` extrapolates from
 #: them): a short one, and a longer one only when the short one's estimate is not
-#: ``_CLEAR`` times inside ``_ESTIMATE_MARGIN`` times the budget.
+#: ``_CLEAR`` times inside ``ESTIMATE_MARGIN`` times the budget.
 _PROBES = (16, 1_000)
 _CLEAR = 100
-_ESTIMATE_MARGIN = 10
+ESTIMATE_MARGIN = 10
 
 
 def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:

@@ -77,10 +77,14 @@ class Family:
         (:func:`cayley_heyoka.cite`).
     formulations
         ``("table.key", (value, ...))``: the scene key that picks the family's formulation and
-        the values a planner may try (:mod:`cayley_heyoka.workflows.planner`), or None.
+        the values a planner may try (:mod:`cayley_heyoka.workflows.planner`), or None. The
+        parsed model's ``formulation`` attribute, where it has one, names the scene's own.
     events
         The names of the events the family offers (``output.events``): no user event
         (``[events.NAME]``) may take one (:func:`.names.check_scene`).
+    with_formulation
+        ``(scene, value) -> dict``: the scene's dictionary in another of its formulations (see
+        :meth:`in_formulation`), or None where setting the key is all it takes.
     """
 
     name: str
@@ -99,6 +103,41 @@ class Family:
     memoirs: tuple[str, ...] = ()
     formulations: tuple[str, tuple[str, ...]] | None = None
     events: tuple[str, ...] = ()
+    with_formulation: Callable[[Any, str], dict[str, Any]] | None = None
+
+    def formulation_of(self, scene: Any) -> str | None:
+        """The formulation ``scene`` is written in (None: the family offers no other)."""
+        if self.formulations is None:
+            return None
+        own = getattr(scene.model, "formulation", None)
+        if isinstance(own, str):
+            return own
+        table, key = self.formulations[0].split(".")
+        value = scene.source.get(table, {}).get(key)
+        return value if isinstance(value, str) else None
+
+    def in_formulation(self, scene: Any, value: str) -> dict[str, Any]:
+        """The scene's dictionary with the same motion in formulation ``value``.
+
+        The one way every verb (the planner's pilots, the checks' twins) changes a scene's
+        formulation: every option the target takes is kept (outputs, monitors, events, units,
+        the integrator's options), and keys that only another formulation takes are converted
+        or dropped by the family's ``with_formulation``.
+
+        Raises
+        ------
+        SceneError
+            The family has no formulations, or ``value`` cannot express the scene (naming the
+            key and why).
+        """
+        if self.formulations is None:
+            raise SceneError("scene", f"the {self.name} family has no other formulation")
+        if self.with_formulation is not None:
+            return self.with_formulation(scene, value)
+        data = scene.to_dict()
+        table, key = self.formulations[0].split(".")
+        data.setdefault(table, {})[key] = value
+        return data
 
 
 def later(module: str, name: str) -> Callable[..., Any]:

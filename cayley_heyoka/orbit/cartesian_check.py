@@ -31,7 +31,7 @@ from ..core.consistency import (
 )
 from ..core.scene import Scene
 from ..mechanics import kepler as el
-from .scene import FORMULATIONS
+from .scene import FORMULATIONS, with_formulation
 
 __all__ = ["TWINS", "check_orbit", "check_twin"]
 
@@ -94,9 +94,7 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
         data["integrator"]["tolerance"] = "auto"
         what = label(other)
     else:
-        data["orbit"]["formulation"] = twin
-        if twin in ("cartesian", "encke"):
-            data["orbit"].pop("sigma0", None)
+        data = with_formulation(own, twin)
         what = f"the {twin} formulation"
     grid = own.time_grid
     # The sensitivity first: an orbit it cannot bound is refused before any run.

@@ -17,5 +17,6 @@ FAMILY = Family(
     variables=later("cayley_heyoka.orbit.variables", "describe"),
     events=("node", "apsis", "equatorial"),
     formulations=("orbit.formulation", ("cartesian", "cayley", "quaternion", "encke")),
+    with_formulation=later("cayley_heyoka.orbit.scene", "with_formulation"),
     memoirs=("cayley1860",),
 )

@@ -144,6 +144,32 @@ class Orbit:
         return self.term(ThirdBody)
 
 
+def with_formulation(scene: Any, value: str) -> dict[str, Any]:
+    """The orbit scene's dictionary integrated in formulation ``value``
+    (``Family.with_formulation``, :meth:`cayley_heyoka.core.families.Family.in_formulation`).
+
+    The motion is the same in every formulation; ``orbit.sigma0``, the gauge of Cayley's
+    angles, is dropped for the Cartesian and Encke ones, which have none (the position and
+    velocity do not depend on it).
+
+    Raises
+    ------
+    SceneError
+        ``orbit.formulation``: ``value`` is unknown.
+    """
+    data = scene.to_dict()
+    if value == scene.model.formulation:
+        return data
+    if value not in FORMULATIONS:
+        raise SceneError("orbit.formulation", f"must be one of {FORMULATIONS}, got {value!r}")
+    orbit = dict(data["orbit"])
+    orbit["formulation"] = value
+    if value in ("cartesian", "encke"):
+        orbit.pop("sigma0", None)
+    data["orbit"] = orbit
+    return data
+
+
 def _parse_initial(table: Mapping[str, Any]) -> tuple:
     cartesian = [k for k in ("position", "velocity") if k in table]
     if "elements" in table:

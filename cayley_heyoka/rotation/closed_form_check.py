@@ -35,6 +35,7 @@ from ..core.consistency import (
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
 from .attitude import quaternion_multiply
+from .scene import with_formulation
 
 __all__ = ["check_closed_form", "check_rotation", "check_twin"]
 
@@ -71,7 +72,11 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
                 "reduction does not integrate: use method=twin (the default here)"
             )
         options.accept(("method",), "twin check of a reduced body")
-        return check_twin(scene, why="the Euler–Poisson reduction has no attitude to check")
+        return check_twin(
+            scene,
+            why="Cayley's element check needs an integrated attitude, which the Euler–Poisson "
+            "reduction has not",
+        )
     if method == "twin":
         options.accept(("method",), "twin check of a forced body")
         return check_twin(scene)
@@ -179,6 +184,7 @@ def check_closed_form(scene: Scene, times: int | None = None) -> CheckReport:
 
 
 LAMBDA = ("lambda", "mu", "nu")
+_QUATERNION = ("qw", "qx", "qy", "qz")
 
 
 def _attitude_rows(
@@ -207,7 +213,7 @@ def _attitude_rows(
     series: dict[str, np.ndarray] = {"t": t}
     for n in "pqr":
         series[f"error_{n}"] = errors[n]
-    quaternion = ("qw", "qx", "qy", "qz")
+    quaternion = _QUATERNION
     if all(n in errors for n in quaternion):
         rows.append(
             CheckRow(
@@ -277,9 +283,7 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
     data.get("output", {}).pop("events", None)
     own = Scene.from_dict(data)
     other = "quaternion" if body.formulation == "rodrigues" else "rodrigues"
-    data.setdefault("attitude", {})["formulation"] = other
-    data["attitude"].pop("max_chart_angle", None)
-    a, b = run(own), run(Scene.from_dict(data))
+    a, b = run(own), run(Scene.from_dict(with_formulation(own, other)))
     cert = difference_certificate(a, b)
     prec = own.integrator.precision
     steps = int(a.counters.get("steps", 0)) + int(b.counters.get("steps", 0))
@@ -310,7 +314,9 @@ _MATRIX = (
 def _check_poisson_twin(scene: Scene, why: str) -> CheckReport:
     """The Euler–Poisson reduction against its quaternion twin: the rates, and γ = Rᵀu of
     the twin's attitude (user monitors of the twin, in its precision). γ's bound is 4× the
-    quaternion's (|δγ| ≤ |δR| ≤ 4|δq| for unit quaternions)."""
+    quaternion's (|δγ| ≤ |δR| ≤ 4|δq| for unit quaternions). With ``output.azimuth`` the
+    reduction's whole attitude too: its quaternion (up to sign: q and −q are one attitude) and
+    λ, μ, ν against the twin's."""
     from ..core.engine import run
     from .poisson import GAMMA, direction
 
@@ -322,21 +328,37 @@ def _check_poisson_twin(scene: Scene, why: str) -> CheckReport:
     own = Scene.from_dict(data)
     prec = own.integrator.precision
     u = [str(x) for x in direction(own.model.forces, prec)]
-    data["attitude"] = {"formulation": "quaternion"}
-    data["monitors"] = {
+    twin = with_formulation(own, "quaternion", more=True)
+    twin["monitors"] = {
         name: {
             "expression": " + ".join(f"({_MATRIX[i][j]})*({u[i]})" for i in range(3)),
             "conserved": False,
         }
         for j, name in enumerate(GAMMA)
     }
-    a, b = run(own), run(Scene.from_dict(data))
-    errors = {}
+    a, b = run(own), run(Scene.from_dict(twin))
+    attitude = [n for n in (*_QUATERNION, *LAMBDA) if n in a.variables]
+    errors, flipped = {}, {}
     with mpmath.workdps(prec.dps + 5):
-        for name in ("p", "q", "r", *GAMMA):
-            mine = exact_values(np.ravel(a[name]), prec)
-            theirs = exact_values(np.ravel(b[name]), prec)
-            errors[name] = np.array([float(abs(x - y)) for x, y in zip(mine, theirs, strict=True)])
+        for name in ("p", "q", "r", *GAMMA, *attitude):
+            pairs = list(
+                zip(
+                    exact_values(np.ravel(a[name]), prec),
+                    exact_values(np.ravel(b[name]), prec),
+                    strict=True,
+                )
+            )
+            errors[name] = np.array([float(abs(x - y)) for x, y in pairs])
+            if name in _QUATERNION:
+                flipped[name] = np.array([float(abs(x + y)) for x, y in pairs])
+    if flipped:
+        # The sign of each row's quaternion is the formulation's choice: q and −q are one
+        # attitude, so each row is compared with the nearer of the twin's two.
+        nearer = np.max(list(flipped.values()), axis=0) < np.max(
+            [errors[n] for n in _QUATERNION], axis=0
+        )
+        for n in _QUATERNION:
+            errors[n] = np.where(nearer, flipped[n], errors[n])
     steps = int(a.counters.get("steps", 0)) + int(b.counters.get("steps", 0))
     tolerance = own.integrator.tolerance
     K = round_off_scale(steps, prec.epsilon, None if tolerance is None else float(tolerance))
@@ -371,9 +393,7 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     from ..core.families import FAMILIES
     from ..core.precision import Precision
 
-    data = scene.to_dict()
-    data.setdefault("attitude", {})["formulation"] = "quaternion"
-    data["attitude"].pop("max_chart_angle", None)
+    data = with_formulation(scene, "quaternion", more=True)
     data["integrator"] = {"precision": "double"}
     # Only the start is the twin's own (the span is given): times that are distinct in the
     # scene's precision but not in double must not refuse the check.

@@ -27,5 +27,6 @@ FAMILY = Family(
     },
     events=("invariable_plane",),
     formulations=("attitude.formulation", ("quaternion", "rodrigues", "poisson")),
+    with_formulation=later("cayley_heyoka.rotation.scene", "with_formulation"),
     memoirs=("cayley1843", "cayley1846", "euler1758"),
 )

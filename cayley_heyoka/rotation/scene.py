@@ -131,6 +131,66 @@ class RigidBody:
         return np.array(att.matrix_to_quaternion(R))
 
 
+def with_formulation(scene: Any, value: str, more: bool = False) -> dict[str, Any]:
+    """The rigid-body scene's dictionary with the same motion integrated as ``value``
+    (``Family.with_formulation``, :meth:`cayley_heyoka.core.families.Family.in_formulation`).
+
+    The whole attitude as a quaternion, as Rodrigues parameters, or by the Euler–Poisson
+    reduction with ``output.azimuth = true`` (set when the reduction is the target) is one
+    motion; the reduction without the azimuth and the rates alone (``"none"``) are others.
+    Away from the reduction ``output.azimuth`` is dropped (the others report the attitude
+    themselves); ``attitude.max_chart_angle`` is the Rodrigues chart's and goes with it.
+
+    Parameters
+    ----------
+    more
+        Allow a target that integrates more than the scene (the whole attitude of a reduced
+        body): a twin that compares what both have.
+
+    Raises
+    ------
+    SceneError
+        ``attitude.formulation``: ``value`` is unknown, or integrates another motion.
+    """
+    data = scene.to_dict()
+    own = scene.model.formulation
+    if value == own:
+        return data
+    if value not in FORMULATIONS:
+        raise SceneError("attitude.formulation", f"must be one of {FORMULATIONS}, got {value!r}")
+    output = dict(data.get("output", {}))
+    if value == "none":
+        raise SceneError(
+            "attitude.formulation",
+            f"'none' integrates the rates alone: it would drop the attitude that {own!r} "
+            "integrates",
+        )
+    if own == "none":
+        raise SceneError(
+            "attitude.formulation",
+            f"the scene integrates the rates alone ('none'): {value!r} would add an attitude "
+            "it does not have",
+        )
+    if own == "poisson" and output.get("azimuth") is not True and not more:
+        raise SceneError(
+            "attitude.formulation",
+            f"the scene reduces the attitude to the direction of its forces ('poisson' without "
+            f"output.azimuth): {value!r} would add the azimuth about it (set output.azimuth = "
+            "true to compare the whole attitude)",
+        )
+    attitude = dict(data.get("attitude", {}))
+    attitude["formulation"] = value
+    if value != "rodrigues":
+        attitude.pop("max_chart_angle", None)
+    data["attitude"] = attitude
+    if value == "poisson":
+        output["azimuth"] = True
+    else:
+        output.pop("azimuth", None)
+    data["output"] = output
+    return data
+
+
 def _check_inertia(inertia: tuple[Number, Number, Number]) -> None:
     A, B, C = (exact_fraction(v) for v in inertia)
     text = dict(zip("ABC", inertia, strict=True))  # as written: float() overflows past 1e308
