@@ -87,8 +87,8 @@ def test_another_request_on_the_same_routes_recommends_afresh(body_plan):
     [
         ({"error": 0}, "error: must be a number > 0"),
         ({"error": -1e-9}, "error: must be a number > 0"),
-        ({"error": math.nan}, "error: must be a finite number > 0"),
-        ({"error": math.inf}, "error: must be a finite number > 0"),
+        ({"error": math.nan}, "error: must be a finite number: "),
+        ({"error": math.inf}, "error: must be a finite number: "),
         ({"error": True}, "error: must be a number"),
         ({"error": 1e-9, "quantity": "energy"}, "quantity: must be one of"),
         ({"error": 1e-9, "formulations": ["euler"]}, "formulations: .* not among"),

@@ -40,7 +40,6 @@ runs (validation/PLANNER.md).
 from __future__ import annotations
 
 import math
-import numbers
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -53,8 +52,8 @@ import numpy as np
 from ..core.closed_form import with_precision
 from ..core.errors import IntegrationError, SceneError
 from ..core.families import FAMILIES, Family
-from ..core.precision import MAX_BITS, Number, Precision, exact_fraction
-from ..core.scene import TOLERANCE_FLOOR, Scene
+from ..core.precision import MAX_BITS, Number, Precision, exact_fraction, number_argument, shown
+from ..core.scene import TOLERANCE_FLOOR, Scene, require_scene
 
 #: What a request bounds: the state along the motion, or the conserved quantities.
 QUANTITIES = ("state", "invariants")
@@ -271,10 +270,7 @@ def plan(
     """
     from ..core.engine import model_of
 
-    if not isinstance(scene, Scene):
-        raise TypeError(
-            f"scene: must be a Scene (Scene.from_dict, load_scene), got {type(scene).__name__}"
-        )
+    scene = require_scene(scene)
     family = FAMILIES[scene.family]
     own = family.formulation_of(scene)
     _, offered = family.formulations or (None, (None,))
@@ -283,11 +279,13 @@ def plan(
     offered = _chosen(formulations, offered)
     conserved = tuple(model_of(scene).conserved)
     wanted = _request(error, quantity, conserved)
-    grid = scene.output.time_grid(scene.integrator.precision)
+    grid = scene.time_grid
     # The span in the run's precision: in double 1e15 + 1e3 - 1e15 is exact.
     span = float(grid[-1] - grid[0])
     if not span > 0:
         raise SceneError("output.times", "span no time: there is nothing to plan")
+    if not math.isfinite(span):
+        raise SceneError("output.times", "span more time than a double holds: too long to plan")
     routes: list[Route] = []
     refused: dict[str, str] = {}
     for formulation in offered:
@@ -335,9 +333,10 @@ def _request(error: Any, quantity: str, conserved: tuple[str, ...]) -> float:
             "'invariants' bounds the drift of the conserved quantities, and this scene "
             "conserves none (no energy, momentum or conserved monitor): ask for the state",
         )
-    value = _fraction(error)
-    if not value > 0:
-        raise RequestError("error", f"must be a number > 0, got {_shown(error)}")
+    try:
+        value = exact_fraction(number_argument(error, "error", positive=True))
+    except (TypeError, ValueError) as exc:  # one message for every bad request number
+        raise RequestError("error", str(exc).removeprefix("error ")) from None
     try:
         wanted = float(value)
     except OverflowError:
@@ -345,34 +344,9 @@ def _request(error: Any, quantity: str, conserved: tuple[str, ...]) -> float:
     if not 0 < wanted < math.inf:
         raise RequestError(
             "error",
-            f"must be a relative error a double holds (5e-324 … 1.8e308), got {_shown(error)}",
+            f"must be a relative error a double holds (5e-324 … 1.8e308), got {shown(error)}",
         )
     return wanted
-
-
-def _fraction(value: Any) -> Fraction:
-    """The exact value of a request's number; RequestError when it is none."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real | Decimal | str):
-        raise RequestError("error", f"must be a number > 0, got {_shown(value)}")
-    try:
-        if isinstance(value, numbers.Integral):
-            return exact_fraction(int(value))
-        if isinstance(value, str | Fraction):
-            return exact_fraction(value)
-        if isinstance(value, Decimal):
-            return Fraction(value)
-        return Fraction(*value.as_integer_ratio())  # type: ignore[attr-defined]
-    except (ValueError, OverflowError, ArithmeticError, AttributeError, TypeError) as exc:
-        raise RequestError("error", f"must be a finite number > 0: {exc}") from None
-
-
-def _shown(value: Any) -> str:
-    """A request's value for a message (an integer of thousands of digits by its size)."""
-    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
-        return (
-            f"an integer of {value.bit_length()} bits (about 1e{int(value.bit_length() * 0.30103)})"
-        )
-    return f"{value!r:.60}"
 
 
 class _Unfit(Exception):
@@ -522,7 +496,7 @@ def _rate(scene: Scene, start: Number, span: float) -> float:
                 "the span"
             ) from None
         if result.status != 0 or stretch >= cap:
-            t0 = float(probe.output.time_grid(probe.integrator.precision)[0])
+            t0 = float(probe.time_grid[0])
             reached = (times[-1] if times else t0) - t0
             if not reached > 0:
                 raise _Unfit("the probe did not advance")
