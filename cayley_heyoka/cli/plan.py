@@ -7,8 +7,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from . import compiling
-
 
 def add_parser(subparsers: Any) -> None:
     """Add ``plan`` to the ``cayley-heyoka`` command."""
@@ -39,8 +37,7 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    with compiling():
-        return _plan(args)
+    return _plan(args)
 
 
 def _plan(args: argparse.Namespace) -> int:

@@ -217,6 +217,9 @@ class Staged:
     """
 
     def __init__(self, path: str | Path) -> None:
+        from .signals import begin_work
+
+        begin_work()  # a temporary is about to exist: a signal no longer ends the process at once
         self.path = Path(path)
         self.target = Path(os.path.realpath(self.path))
         self.tmp = self.target.with_name(f".{self.target.name}.tmp-{os.getpid()}")
