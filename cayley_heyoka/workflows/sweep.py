@@ -24,6 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from ..core.scene import Scene
+from ..core.signals import begin_work
+from . import sweep_dask
 from .members import integrate_members, prepare_members, propagate_members, split
 from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
 from .sweep_result import (
@@ -113,7 +115,8 @@ def run_sweep(
     out
         The HDF5 sweep file, written chunk by chunk as members complete: a sweep stopped
         midway (an interruption, a lost cluster) leaves a readable file with what it computed,
-        its other members marked ``NOT_RUN`` and ``metadata["complete"]`` false.
+        its other members marked ``NOT_RUN`` and ``metadata["complete"]`` false. One stopped
+        before any member ended writes nothing: a file already there stays as it was.
     backend, scheduler, workers, chunk
         Override the study's ``[run]`` table (see :class:`RunOptions`). ``chunk`` defaults to
         256 members locally and, on Dask, to a quarter of an even share per worker (at most
@@ -129,8 +132,11 @@ def run_sweep(
     Raises
     ------
     SceneError
-        A member whose scene is invalid (naming the member, its values and the field), or bad
-        run options; raised before anything is integrated.
+        A member whose scene is invalid (naming the member, its values and the field), bad
+        run options, or a Dask scheduler that does not answer within
+        :data:`.sweep_dask.CONNECT_TIMEOUT` or has no worker (naming ``run.scheduler``, or
+        ``--scheduler`` for the ``scheduler`` argument); raised before anything is integrated
+        or written.
     """
     run = override_run(study.run, backend, scheduler, workers, chunk)
     members = study.members()
@@ -145,7 +151,16 @@ def run_sweep(
     layout = layout_of(study)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
-    writer = Writer(out, result) if out is not None else None
+    # The cluster first: a scheduler that cannot be reached is refused before the file is
+    # staged, and a Ctrl-C until here ends the process at once.
+    cluster = sweep_dask.connect(run) if run.backend == "dask" else None
+    begin_work()
+    try:
+        writer = Writer(out, result) if out is not None else None
+    except BaseException:
+        if cluster is not None:
+            cluster.close()
+        raise
     paths: Counter = Counter()
     why: dict[str, str] = {}
     compile_seconds = 0.0
@@ -175,13 +190,13 @@ def run_sweep(
             info["chunk"] = size
             _pipeline(study, indexed, layout, threads, size, scenes, take)
         else:
-            from . import sweep_dask
-
-            info.update(sweep_dask.propagate(study, indexed, layout, run, take))
+            info.update(sweep_dask.propagate(cluster, study, indexed, layout, run, take))
     except BaseException as exc:
         stopped = f"{type(exc).__name__}: {exc}"
         raise
     finally:
+        if cluster is not None:
+            cluster.close()
         from ..core.result import versions
 
         result.metadata = {
@@ -195,7 +210,12 @@ def run_sweep(
             "stopped": stopped,
         }
         if writer is not None:
-            writer.close(result.metadata)
+            # A sweep that stopped before any member ended has nothing to keep: the file
+            # already at ``out`` (a completed sweep, perhaps) stays as it was.
+            if done:
+                writer.close(result.metadata)
+            else:
+                writer.discard()
     return result
 
 

@@ -574,12 +574,16 @@ class Writer:
         except BaseException as exc:
             self._abandon(exc)
 
-    def _abandon(self, exc: BaseException) -> None:
-        """Drop the temporary (the previous file stays) and raise ``exc``."""
+    def discard(self) -> None:
+        """Drop the temporary: the previous file stays."""
         if self.file is not None:
             self.file.close()
             self.file = None
         self.staged.discard()
+
+    def _abandon(self, exc: BaseException) -> None:
+        """Drop the temporary (the previous file stays) and raise ``exc``."""
+        self.discard()
         if isinstance(exc, OSError):
             raise OutputError.failed_write(self.path, exc) from exc
         raise exc
