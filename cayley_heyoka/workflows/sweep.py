@@ -152,9 +152,8 @@ def run_sweep(
     prec = study.precision
     result = empty_result(study, members, layout, prec)
     # The cluster first: a scheduler that cannot be reached is refused before the file is
-    # staged, and a Ctrl-C until here ends the process at once.
+    # staged.
     cluster = sweep_dask.connect(run) if run.backend == "dask" else None
-    begin_work()
     try:
         writer = Writer(out, result) if out is not None else None
     except BaseException:
@@ -170,6 +169,9 @@ def run_sweep(
 
     def take(part: Chunk) -> None:
         nonlocal compile_seconds, done
+        # Something to keep from here on: a signal stops the sweep, which writes what it
+        # computed (before, it ends the process at once: :mod:`~cayley_heyoka.core.signals`).
+        begin_work()
         fill_chunk(result, part, prec)
         if writer is not None:
             writer.write(part, prec)

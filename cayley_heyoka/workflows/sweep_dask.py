@@ -126,14 +126,13 @@ def _answers(address: str, seconds: float, field: str) -> None:
     asker.start()
     asker.join(seconds + 5)  # the asker's own deadline ends it first
     error = box.get("error")
+    why = None
     if asker.is_alive() or isinstance(error, TimeoutError):
-        raise SceneError(
-            field,
-            f"the Dask scheduler at {address} did not answer within {seconds} s "
-            "(is it a Dask scheduler, and is it running?)",
-        )
-    if error is not None:
-        raise SceneError(field, f"cannot reach the Dask scheduler at {address}: {error}")
+        why = f"no answer within {seconds} s (is a Dask scheduler running there?)"
+    elif error is not None:
+        why = str(error)  # distributed's, e.g. its own timeout: nothing listening
+    if why is not None:
+        raise SceneError(field, f"cannot reach the Dask scheduler at {address}: {why}")
 
 
 def propagate(
