@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
     _standard_descriptors()  # before anything opens a file, the signal policy's pipe included
     from ..core.signals import command_signals
 
-    with command_signals():
+    with command_signals() as policy:
         from .terminal import SafeStream
 
         out, err = sys.stdout, sys.stderr
@@ -44,17 +44,20 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout, sys.stderr = safe_out, safe_err
         try:
             try:
-                return _main(argv)
+                code = _main(argv)
             except KeyboardInterrupt:  # in a command that keeps nothing, or kept it already
+                policy.finish()
                 print("interrupted", file=sys.stderr)
-                return 130
+                code = 130
             finally:
-                # Output held in a buffer shows here, not in the interpreter's exit; a stream
-                # that cannot take it is pointed at /dev/null, so that the interpreter's
-                # final flush does not fail (and change the exit status) either.
-                for safe, stream in ((safe_out, out), (safe_err, err)):
-                    if not safe.flush_or_drop():
-                        _silence(stream)
+                policy.finish()  # a second Ctrl-C while the command ends: exit 130 at once
+            # Output held in a buffer shows here, not in the interpreter's exit; a stream that
+            # cannot take it is pointed at /dev/null, so that the interpreter's final flush
+            # does not fail (and change the exit status) either.
+            for safe, stream in ((safe_out, out), (safe_err, err)):
+                if not safe.flush_or_drop():
+                    _silence(stream)
+            return code
         finally:
             sys.stdout, sys.stderr = out, err
 

@@ -17,6 +17,9 @@
   the import is done. During a propagation in the main thread it is only noted and the
   propagation ends after the current step (:class:`DeferredSignals`, :class:`Watch`).
 
+* **Once the work is over** (:meth:`SignalPolicy.finish`: the files written, the report
+  being printed): a signal ends the process at once again, exit 130.
+
 An ignored signal (``nohup``, a background job of a shell script) stays ignored. Outside the
 command line (the Python API) nothing is installed and Python's own Ctrl-C holds, with the
 deferral during propagations.
@@ -42,7 +45,8 @@ class SignalPolicy:
     """The command line's handling of SIGINT and SIGTERM (the module docstring)."""
 
     def __init__(self) -> None:
-        self.working = False
+        #: ``"start"`` (nothing computed), ``"work"``, ``"done"`` (everything written).
+        self.phase = "start"
         self.installed = False
         self._old: dict[int, Any] = {}
         self._old_wakeup = -1
@@ -57,7 +61,7 @@ class SignalPolicy:
         """Take over both signals (main thread only; an ignored one stays ignored)."""
         if self.installed or threading.current_thread() is not threading.main_thread():
             return
-        self.working = False
+        self.phase = "start"
         for sig in SIGNALS:
             if signal.getsignal(sig) is not signal.SIG_IGN:
                 self._old[sig] = signal.signal(sig, self._handler)
@@ -86,10 +90,16 @@ class SignalPolicy:
 
     def begin_work(self) -> None:
         """From now on something may be lost: a signal raises KeyboardInterrupt."""
-        self.working = True
+        if self.phase == "start":
+            self.phase = "work"
+
+    def finish(self) -> None:
+        """The command's work is over (its files written): a signal now ends the process at
+        once, as before any work, rather than interrupting the report with a traceback."""
+        self.phase = "done"
 
     def _handle(self, signum: int, frame: Any) -> None:
-        if not self.working:
+        if self.phase != "work":
             self._end(signum)
         if _importing(frame):
             # Not inside an import (its module would stay half-made): the signal comes again
@@ -109,16 +119,18 @@ class SignalPolicy:
                 if (
                     signum in SIGNALS
                     and self.installed
-                    and not self.working
+                    and self.phase != "work"
                     and signal.getsignal(signum) is self._handler
                 ):
                     self._end(signum)
 
     def _end(self, signum: int) -> None:
-        """End the process now: nothing has been computed. The main thread's handler and the
-        watcher may both come here; the second waits for the first to end the process."""
+        """End the process now: nothing is computed yet, or everything is written. The main
+        thread's handler and the watcher may both come here; the second waits for the first
+        to end the process."""
         self._ending.acquire()
-        text = f"interrupted ({signal.Signals(signum).name}): nothing was computed\n"
+        text = f"interrupted ({signal.Signals(signum).name})"
+        text += ": nothing was computed\n" if self.phase == "start" else "\n"
         with contextlib.suppress(OSError):
             os.write(2, (("\n" if os.isatty(2) else "") + text).encode())
         os._exit(INTERRUPTED_EXIT)
