@@ -78,6 +78,9 @@ def connect(run: RunOptions) -> Cluster:
         local = None
     else:
         field, where = "run.backend", "LocalCluster"
+        # Still before any work: a signal while it starts ends this process at once, and
+        # its worker processes end with it (a KeyboardInterrupt inside its start-up would
+        # leave distributed's AssertionError tracebacks).
         n = run.workers or os.cpu_count() or 1
         local = distributed.LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None

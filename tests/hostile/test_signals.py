@@ -6,8 +6,8 @@ exit 130, ``interrupted (SIG...): nothing was computed``, no traceback, nothing 
 moments are found from outside, in ``/proc``: the policy's SIGTERM handler installed
 (``SigCgt``), heyoka's extension mapped (it then imports sympy), the progress bar drawn before
 a compilation of minutes. A report that cannot be printed (stdout or stderr closed, stdout
-full or a pipe whose reader has gone) changes neither the exit code nor ``--out``. Each case
-ends as conftest.py requires.
+full; a pipe whose reader has gone: tests/test_result_files.py) changes neither the exit code
+nor ``--out``. Each case ends as conftest.py requires.
 """
 
 from __future__ import annotations
@@ -193,18 +193,6 @@ def test_a_refusal_with_stderr_closed_still_exits_2(tmp_path):
     """Printing the refusal to a closed stderr raised, and the command exited 1."""
     o = _with_streams(["run", str(tmp_path / "missing.toml")], "exec 2>&-")
     assert o.code == 2, o
-
-
-@pytest.mark.covers("class:12", "verb:info")
-def test_info_into_a_pipe_closed_early_ends_as_it_would(result_file):
-    """``info F | head -1``: the rest of the report is dropped, the exit code is info's."""
-    pipes = {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE}
-    proc = subprocess.Popen([*CLI, "info", str(result_file)], **pipes)
-    proc.stdout.close()
-    err = proc.stderr.read().decode()
-    proc.stderr.close()
-    _judge(Outcome(["info"], proc.wait(timeout=120), "", err, 0.0, ""), "done", None, None, 120)
-    assert err == ""
 
 
 class _Full(io.TextIOBase):
