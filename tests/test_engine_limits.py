@@ -267,8 +267,10 @@ def test_a_signal_during_compilation_ends_the_process_at_once(tmp_path, sig):
         _, err = proc.communicate(timeout=60)
     finally:
         proc.kill()
-    # Killed by the signal while compiling, or (on a slow start) interrupted just before.
-    assert proc.returncode in (-sig, 130), err
+    # Nothing computed yet: the process ends at once, cleanly (the LLVM compilation holds no
+    # GIL, so the signal policy's watching thread can end it).
+    assert proc.returncode == 130, err
+    assert f"interrupted ({signal.Signals(sig).name}): nothing was computed" in err
     assert time.monotonic() - sent < 15 and "Traceback" not in err
 
 
@@ -349,8 +351,8 @@ def test_a_signal_stops_a_run_without_progress_bar_or_terminal_events(tmp_path):
     )
     out = tmp_path / "r.h5"
     cmd = [sys.executable, "-m", "cayley_heyoka.cli", "run", str(scene), "--out", str(out)]
-    # A signal during start-up or compilation ends the process at once (exit -2: nothing was
-    # computed, by design); on a loaded machine that can outlast the wait, so wait longer.
+    # A signal during start-up or compilation ends the process at once (nothing was computed,
+    # by design); on a loaded machine that can outlast the wait, so wait longer.
     for wait in (4, 12, 30):
         proc = subprocess.Popen(cmd + ["--no-progress"], stderr=subprocess.PIPE, text=True)
         time.sleep(wait)
@@ -359,7 +361,7 @@ def test_a_signal_stops_a_run_without_progress_bar_or_terminal_events(tmp_path):
             _, err = proc.communicate(timeout=20)
         finally:
             proc.kill()
-        if proc.returncode != -signal.SIGINT:
+        if "nothing was computed" not in err:
             break
     assert proc.returncode == 130, err
     assert "interrupted (SIGINT)" in err

@@ -457,7 +457,7 @@ def test_info_piped_into_head_ends_quietly(tmp_path):
     )
     proc.stdout.close()
     err = proc.stderr.read().decode()
-    assert proc.wait(timeout=60) == 1
+    assert proc.wait(timeout=60) == 0  # info's own exit code: the report was cut, not the work
     assert err == ""
 
 

@@ -457,17 +457,20 @@ def test_dask_local_cluster_gives_the_local_arrays(body_sweep, tmp_path):
     assert list(result.message) == list(local.message)
 
 
-def test_an_unreachable_scheduler_is_an_error_and_the_file_says_so(tmp_path, capsys, monkeypatch):
+def test_an_unreachable_scheduler_is_refused_before_the_file_is_written(
+    tmp_path, capsys, monkeypatch
+):
     pytest.importorskip("distributed")
     from cayley_heyoka.workflows import sweep_dask
 
     monkeypatch.setattr(sweep_dask, "CONNECT_TIMEOUT", 1)
     out = tmp_path / "lost.h5"
     args = ["sweep", str(STUDIES / "free_body_random.toml"), "--out", str(out), "--no-progress"]
-    assert main([*args, "--scheduler", "tcp://127.0.0.1:9"]) == 1
-    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
-    kept = SweepResult.load(out)
-    assert not kept.metadata["complete"] and (kept.status == NOT_RUN).all()
+    assert main([*args, "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    assert "--scheduler: cannot reach the Dask scheduler at tcp://127.0.0.1:9" in (
+        capsys.readouterr().err
+    )
+    assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
 def test_scheduler_address_reaches_a_cluster_of_separate_processes(body_sweep, tmp_path):

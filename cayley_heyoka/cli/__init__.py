@@ -9,14 +9,13 @@ parsing of every command start without them, and no command pays for another's i
 
 from __future__ import annotations
 
-import argparse
-import contextlib
 import os
-import signal
 import sys
-import threading
-from collections.abc import Iterator
 from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # argparse is imported by main, after the signal policy is in place
+    import argparse
 
 #: The verb modules of this package, in the order ``--help`` lists them; each has
 #: ``add_parser(subparsers)``, which sets ``handler`` to the function running the command.
@@ -26,65 +25,65 @@ VERBS: tuple[str, ...] = ("run", "info", "check", "reference", "plot", "sweep", 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``cayley-heyoka`` console script.
 
-    What it prints goes through :class:`~cayley_heyoka.cli.terminal.SafeStream` (text from files
-    cannot drive the terminal); output cut short by a closed pipe (``| head``) ends quietly.
+    The signal policy (:mod:`cayley_heyoka.core.signals`) holds from the first line: a
+    Ctrl-C or SIGTERM before any work ends the command at once with exit 130, one during the
+    work stops it cleanly with its results. What it prints goes through
+    :class:`~cayley_heyoka.cli.terminal.SafeStream` (text from files cannot drive the
+    terminal, and a report that cannot be written — stdout closed, full or a closed pipe —
+    changes nothing of what the command does or returns).
     """
-    from .terminal import SafeStream
+    _standard_descriptors()  # before anything opens a file, the signal policy's pipe included
+    from ..core.signals import command_signals
 
-    out, err = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = SafeStream(out), SafeStream(err, allow_cr=True)
-    try:
-        with _interruptible():
-            code = _main(argv)
-        out.flush()  # a closed pipe shows here, not in the interpreter's exit
-        return code
-    except KeyboardInterrupt:  # before anything was computed, or in a command that keeps nothing
-        print("interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:
-        # Nothing more can be printed; point stdout at /dev/null so that the interpreter's
-        # final flush does not complain either.
-        _silence(out)
-        return 1
-    finally:
-        sys.stdout, sys.stderr = out, err
+    with command_signals() as policy:
+        from .terminal import SafeStream
 
-
-@contextlib.contextmanager
-def _interruptible() -> Iterator[None]:
-    """SIGTERM ends a command as Ctrl-C does (results kept, exit 130). The commands that
-    compile also end the process at once on either while LLVM compiles (:func:`compiling`)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGTERM, signal.default_int_handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
+        out, err = sys.stdout, sys.stderr
+        safe_err = SafeStream(err, allow_cr=True, label="stderr")
+        safe_out = SafeStream(out, label="stdout", warn=safe_err)
+        sys.stdout, sys.stderr = safe_out, safe_err
+        try:
+            try:
+                code = _main(argv)
+            except KeyboardInterrupt:  # in a command that keeps nothing, or kept it already
+                policy.finish()
+                print("interrupted", file=sys.stderr)
+                code = 130
+            finally:
+                policy.finish()  # a second Ctrl-C while the command ends: exit 130 at once
+            # Output held in a buffer shows here, not in the interpreter's exit; a stream that
+            # cannot take it is pointed at /dev/null, so that the interpreter's final flush
+            # does not fail (and change the exit status) either.
+            for safe, stream in ((safe_out, out), (safe_err, err)):
+                if not safe.flush_or_drop():
+                    _silence(stream)
+            return code
+        finally:
+            sys.stdout, sys.stderr = out, err
 
 
-@contextlib.contextmanager
-def compiling() -> Iterator[None]:
-    """:func:`~cayley_heyoka.core.signals.signals_end_compilation` for a command that integrates.
+def _standard_descriptors() -> None:
+    """Open /dev/null on a standard descriptor (0, 1, 2) that is closed.
 
-    Entered by the command, not by :func:`main`: the engine imports heyoka, which the commands
-    that do not integrate (and ``--help``) never load.
+    The next file opened would otherwise take that number, and whatever writes to stdout or
+    stderr below Python (heyoka's and HDF5's C++ logs) would write into it: into a result file.
     """
-    if threading.current_thread() is not threading.main_thread():
-        yield  # the signals are the main thread's (and the engine's switch is process-wide)
-        return
-    from ..core.signals import signals_end_compilation
-
-    with signals_end_compilation():
-        yield
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            null = os.open(os.devnull, os.O_RDWR)
+            if null != fd:  # a lower one was closed too and took it: move it up
+                os.dup2(null, fd)
+                os.close(null)
 
 
 def _silence(stream: object) -> None:
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, stream.fileno())
-    except (OSError, AttributeError, ValueError):  # not a real file (a test's capture)
+        os.close(devnull)
+    except (OSError, AttributeError, ValueError):  # not a real file (a test's capture), None
         pass
 
 
@@ -100,20 +99,21 @@ def _version() -> str:
     return f"cayley-heyoka {of('cayley_heyoka')} (heyoka {of('heyoka')})"
 
 
-class _Version(argparse._VersionAction):
-    """``--version``, its text looked up only when asked for: argparse's own action takes it
-    when the parser is built, and importing and reading package metadata costs ~15 ms."""
-
-    def __call__(self, parser: argparse.ArgumentParser, *args: object, **kwargs: object) -> None:
-        self.version = _version()
-        super().__call__(parser, *args, **kwargs)
-
-
 def _main(argv: list[str] | None) -> int:
+    import argparse
+
+    class Version(argparse._VersionAction):
+        """``--version``, its text looked up only when asked for: argparse's own action takes
+        it when the parser is built, and importing and reading package metadata costs ~15 ms."""
+
+        def __call__(self, parser: argparse.ArgumentParser, *args: Any, **kwargs: Any) -> None:
+            self.version = _version()
+            super().__call__(parser, *args, **kwargs)
+
     parser = argparse.ArgumentParser(
         prog="cayley-heyoka", description="High-accuracy Taylor integration of classical dynamics."
     )
-    parser.add_argument("--version", action=_Version)
+    parser.add_argument("--version", action=Version)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in VERBS:
         import_module(f".{name}", __package__).add_parser(sub)

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from . import OVERWRITE_HELP, compiling, destination
+from . import OVERWRITE_HELP, destination
 
 
 def add_parser(subparsers: Any) -> None:
@@ -30,8 +30,7 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    with compiling():
-        return _check(args)
+    return _check(args)
 
 
 def _check(args: argparse.Namespace) -> int:

@@ -7,8 +7,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from . import compiling
-
 
 def add_parser(subparsers: Any) -> None:
     """Add ``plan`` to the ``cayley-heyoka`` command."""
@@ -41,8 +39,7 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    with compiling():
-        return _plan(args)
+    return _plan(args)
 
 
 #: The option of each argument of :func:`~cayley_heyoka.workflows.planner.plan`.

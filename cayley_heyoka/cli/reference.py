@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from . import add_progress, compiling, show_progress
+from . import add_progress, show_progress
 
 if TYPE_CHECKING:
     from ..core.precision import Precision
@@ -84,8 +84,7 @@ def _positive_int(text: str) -> int:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    with compiling():
-        return _reference(args)
+    return _reference(args)
 
 
 def _reference(args: argparse.Namespace) -> int:

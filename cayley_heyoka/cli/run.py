@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from . import OVERWRITE_HELP, add_progress, compiling, destination, show_progress
+from . import OVERWRITE_HELP, add_progress, destination, show_progress
 
 
 def add_parser(subparsers: Any) -> None:
@@ -22,8 +22,7 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    with compiling():
-        return _run(args)
+    return _run(args)
 
 
 def _run(args: argparse.Namespace) -> int:

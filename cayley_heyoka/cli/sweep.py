@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from . import add_progress, compiling, show_progress
+from . import add_progress, show_progress
 
 # The backends, written here so that building the parser imports nothing of the sweep;
 # tests/test_cli_imports.py holds them equal to study.BACKENDS.
@@ -38,8 +38,7 @@ def add_parser(subparsers: Any) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run the command; returns its exit code."""
-    with compiling():
-        return _sweep(args)
+    return _sweep(args)
 
 
 def _sweep(args: argparse.Namespace) -> int:

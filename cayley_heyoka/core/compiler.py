@@ -18,7 +18,6 @@ import heyoka as hy
 from .errors import SceneError
 from .model import Model
 from .scene import IntegratorOptions
-from .signals import signals_end_process
 
 #: Above this many bytes of serialised right-hand sides (:meth:`Model.size`), compile in compact
 #: mode. Measured (validation/BENCHMARKS.md, "setup", four families): non-compact compile time
@@ -123,7 +122,7 @@ def compile_model(model: Model, options: IntegratorOptions) -> tuple[Compiled, b
                 f"events.{e.name}.expression",
                 f"is constant ({e.expression}): an event needs the state or t to cross zero",
             )
-    with signals_end_process(), quiet_heyoka():
+    with quiet_heyoka():
         compiled = _compile(model, options)
     _CACHE[key] = compiled
     return compiled, False

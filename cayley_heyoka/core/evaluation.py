@@ -30,6 +30,8 @@ from typing import Any
 
 import mpmath
 
+from .signals import begin_work
+
 #: Below this many output times the evaluation stays in the calling process: starting a
 #: worker costs ~0.4 s of CPU (its imports and the closed form's constants at each working
 #: precision), some 40 evaluations of the free body at 30 digits, so that fewer times gain
@@ -145,6 +147,9 @@ def evaluate(
     workers = default_workers() if workers is None else workers
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
+    # Values are computed and saved, perhaps by worker processes, from here: a signal stops
+    # the evaluation (the workers terminated first) instead of ending the process at once.
+    begin_work()
     times = list(times)
     size = max(1, math.ceil(len(times) / CHUNKS))
     chunks = [times[i : i + size] for i in range(0, len(times), size)]

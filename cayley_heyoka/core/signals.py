@@ -1,52 +1,175 @@
-"""Ctrl-C and SIGTERM around heyoka's C++ calls: noted during a propagation and acted on
-after the current step (:class:`DeferredSignals`, :class:`Watch`, the thread the main thread's
-propagations run in), or, during an LLVM compilation, ending the process at once
-(:func:`signals_end_compilation`)."""
+"""Ctrl-C and SIGTERM: one policy for the command line, from the first line of its ``main``.
+
+:func:`command_signals` holds it for the life of a command. Two phases:
+
+* **Before any work** (parsing, imports, loading the scene, compiling): nothing has been
+  computed or written, so either signal ends the process at once, exit 130, printing
+  ``interrupted (SIGINT): nothing was computed``. No KeyboardInterrupt is raised there: one
+  raised inside an import leaves modules half-imported (``module 'sympy' has no attribute
+  'core'`` later) or is swallowed by the C code that imports, and LLVM compiles without
+  returning to Python for seconds to minutes. A thread woken by the signal's byte on
+  :func:`signal.set_wakeup_fd` acts at once, also while the main thread is in C++ (heyoka
+  compiles without the GIL).
+* **Once work has begun** (:func:`begin_work`: a propagation starts, a sweep starts
+  integrating, a file is staged): a signal is Python's KeyboardInterrupt, which the commands
+  turn into "interrupted", exit 130, keeping what they computed — never inside an import (a
+  lazy one, h5py's when a result is saved): one that arrives there is delivered again once
+  the import is done. During a propagation in the main thread it is only noted and the
+  propagation ends after the current step (:class:`DeferredSignals`, :class:`Watch`).
+
+* **Once the work is over** (:meth:`SignalPolicy.finish`: the files written, the report
+  being printed): a signal ends the process at once again, exit 130.
+
+An ignored signal (``nohup``, a background job of a shell script) stays ignored. Outside the
+command line (the Python API) nothing is installed and Python's own Ctrl-C holds, with the
+deferral during propagations.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import os
 import queue
 import signal
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any
 
-_END_ON_SIGNAL = 0
-
-
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
-
-@contextlib.contextmanager
-def signals_end_compilation() -> Iterator[None]:
-    """Within this context, SIGINT or SIGTERM during an LLVM compilation ends the process.
-
-    LLVM compiles in C++ without returning to Python, so Python's handlers (Ctrl-C's
-    KeyboardInterrupt) would run only when it is done — after seconds or minutes. Nothing is
-    computed before the compilation, so for a command-line process ending at once loses
-    nothing; the signals get their default disposition while compiling, Python's handlers
-    back afterwards. Only in the main thread.
-    """
-    global _END_ON_SIGNAL
-    _END_ON_SIGNAL += 1
-    try:
-        yield
-    finally:
-        _END_ON_SIGNAL -= 1
+#: The exit status of a command ended by a signal (128 + SIGINT, as shells report Ctrl-C).
+INTERRUPTED_EXIT = 130
 
 
-@contextlib.contextmanager
-def signals_end_process() -> Iterator[None]:
-    if not _END_ON_SIGNAL or threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = {sig: signal.signal(sig, signal.SIG_DFL) for sig in SIGNALS}
-    try:
-        yield
-    finally:
-        for sig, handler in old.items():
+class SignalPolicy:
+    """The command line's handling of SIGINT and SIGTERM (the module docstring)."""
+
+    def __init__(self) -> None:
+        #: ``"start"`` (nothing computed), ``"work"``, ``"done"`` (everything written).
+        self.phase = "start"
+        self.installed = False
+        self._old: dict[int, Any] = {}
+        self._old_wakeup = -1
+        self._wakeup: int | None = None
+        self._ending = threading.Lock()
+        self._again: list[threading.Timer] = []
+        # The handler as installed, so that the watching thread can tell it from another
+        # one installed over it (a propagation's, a write's): those decide for themselves.
+        self._handler = self._handle
+
+    def install(self) -> None:
+        """Take over both signals (main thread only; an ignored one stays ignored)."""
+        if self.installed or threading.current_thread() is not threading.main_thread():
+            return
+        self.phase = "start"
+        for sig in SIGNALS:
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                self._old[sig] = signal.signal(sig, self._handler)
+        if self._wakeup is None:
+            r, w = os.pipe()
+            os.set_blocking(w, False)
+            self._wakeup = w
+            threading.Thread(
+                target=self._watch, args=(r,), name="cayley_heyoka-signals", daemon=True
+            ).start()
+        self._old_wakeup = signal.set_wakeup_fd(self._wakeup, warn_on_full_buffer=False)
+        self.installed = True
+
+    def uninstall(self) -> None:
+        """Give both signals back their previous handlers."""
+        if not self.installed:
+            return
+        self.installed = False
+        for again in self._again:  # the command is over: what it left undelivered is moot
+            again.cancel()
+        self._again.clear()
+        signal.set_wakeup_fd(self._old_wakeup)
+        for sig, handler in self._old.items():
             signal.signal(sig, handler)
+        self._old.clear()
+
+    def begin_work(self) -> None:
+        """From now on something may be lost: a signal raises KeyboardInterrupt."""
+        if self.phase == "start":
+            self.phase = "work"
+
+    def finish(self) -> None:
+        """The command's work is over (its files written): a signal now ends the process at
+        once, as before any work, rather than interrupting the report with a traceback."""
+        self.phase = "done"
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.phase != "work":
+            self._end(signum)
+        if _importing(frame):
+            # Not inside an import (its module would stay half-made): the signal comes again
+            # shortly, to whatever handles it then, until the import is done.
+            again = threading.Timer(_AGAIN, os.kill, (os.getpid(), signum))
+            again.daemon = True
+            self._again.append(again)
+            again.start()
+            return
+        raise KeyboardInterrupt
+
+    def _watch(self, fd: int) -> None:
+        # Python's C-level handler writes each signal's number here as it arrives, while the
+        # main thread may not run Python code for a long time (an import's C part, LLVM).
+        while data := os.read(fd, 512):
+            for signum in data:
+                if (
+                    signum in SIGNALS
+                    and self.installed
+                    and self.phase != "work"
+                    and signal.getsignal(signum) is self._handler
+                ):
+                    self._end(signum)
+
+    def _end(self, signum: int) -> None:
+        """End the process now: nothing is computed yet, or everything is written. The main
+        thread's handler and the watcher may both come here; the second waits for the first
+        to end the process."""
+        self._ending.acquire()
+        text = f"interrupted ({signal.Signals(signum).name})"
+        text += ": nothing was computed\n" if self.phase == "start" else "\n"
+        with contextlib.suppress(OSError):
+            os.write(2, (("\n" if os.isatty(2) else "") + text).encode())
+        os._exit(INTERRUPTED_EXIT)
+
+
+#: Seconds after which a signal that arrived during an import is delivered again.
+_AGAIN = 0.05
+
+
+def _importing(frame: Any) -> bool:
+    """Whether ``frame`` runs inside an import (importlib's frames are below it)."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib._bootstrap"):
+            return True
+        frame = frame.f_back
+    return False
+
+
+POLICY = SignalPolicy()
+
+
+@contextlib.contextmanager
+def command_signals() -> Iterator[SignalPolicy]:
+    """The command line's signal policy, for the duration of the context (:class:`SignalPolicy`).
+
+    Entered first thing in ``main``; outside the main thread it installs nothing.
+    """
+    POLICY.install()
+    try:
+        yield POLICY
+    finally:
+        POLICY.uninstall()
+
+
+def begin_work() -> None:
+    """Say that work has begun (something computed, a file or a cluster being made): from now
+    on a signal no longer ends the process at once but raises KeyboardInterrupt, which the
+    work turns into a clean stop. Idempotent; outside the command line it changes nothing."""
+    POLICY.begin_work()
 
 
 class DeferredSignals:
@@ -80,6 +203,7 @@ class DeferredSignals:
             self.on_signal()
 
     def __enter__(self) -> DeferredSignals:
+        begin_work()
         if threading.current_thread() is threading.main_thread():
             for sig in SIGNALS:
                 old = signal.getsignal(sig)
@@ -162,7 +286,9 @@ def held_signals() -> Iterator[None]:
     line) is held too, and then ends the process after the write; an ignored one stays
     ignored. When the context ends by an exception, which already ends the work, a noted
     signal is not delivered again. Contexts nest: an inner one hands its signals to the outer.
+    Entering it begins the command's work (:func:`begin_work`): what is being written is kept.
     """
+    begin_work()
     if threading.current_thread() is not threading.main_thread():
         yield  # Python delivers signals to the main thread only: nothing interrupts this one
         return

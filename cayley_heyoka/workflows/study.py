@@ -103,21 +103,23 @@ class RunOptions:
     scheduler: str | None = None
     workers: int | None = None
     chunk: int | None = None
+    #: What a refusal of the scheduler names: the study's field or the command-line option.
+    scheduler_field: str = field(default="run.scheduler", compare=False)
 
     @classmethod
-    def parse(cls, table: Mapping[str, Any], where: str = "run") -> RunOptions:
+    def parse(
+        cls, table: Mapping[str, Any], where: str = "run", scheduler_field: str | None = None
+    ) -> RunOptions:
         check_keys(table, ["backend", "scheduler", "workers", "chunk"], where)
+        named = scheduler_field or f"{where}.scheduler"
         scheduler = table.get("scheduler")
-        if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
-            raise SceneError(
-                f"{where}.scheduler",
-                f"must be an address like 'tcp://host:8786', got {scheduler!r}",
-            )
+        if scheduler is not None:
+            check_address(scheduler, named)
         backend = table.get("backend", "dask" if scheduler else "local")
         if backend not in BACKENDS:
             raise SceneError(f"{where}.backend", f"must be one of {BACKENDS}, got {backend!r}")
         if scheduler and backend != "dask":
-            raise SceneError(f"{where}.scheduler", "is a Dask scheduler: it needs backend = 'dask'")
+            raise SceneError(named, "is a Dask scheduler: it needs backend = 'dask'")
         workers = _count(table.get("workers"), f"{where}.workers")
         if scheduler and workers is not None:
             raise SceneError(
@@ -125,7 +127,39 @@ class RunOptions:
                 "applies to this machine (threads, or the LocalCluster's processes); with a "
                 "scheduler the cluster's own workers run the sweep",
             )
-        return cls(backend, scheduler, workers, _count(table.get("chunk"), f"{where}.chunk"))
+        chunk = _count(table.get("chunk"), f"{where}.chunk")
+        return cls(backend, scheduler, workers, chunk, named)
+
+
+#: The schemes whose address is ``host:port``.
+_HOST_PORT = ("tcp", "tls", "ws", "wss")
+
+
+def check_address(address: Any, name: str) -> None:
+    """Refuse a scheduler address that dask.distributed could not connect to, naming ``name``.
+
+    Checked when the study is read, before anything is integrated or written, with
+    distributed's own parser (when distributed is not installed, running the sweep says so).
+    """
+    example = "an address like 'tcp://host:8786'"
+    if not isinstance(address, str) or not address.strip():
+        raise SceneError(name, f"must be {example}, got {address!r}")
+    try:
+        from distributed.comm.addressing import parse_address, parse_host_port
+        from distributed.comm.registry import get_backend
+    except ImportError:
+        return
+    try:
+        scheme, location = parse_address(address)
+        get_backend(scheme)
+        if scheme in _HOST_PORT:
+            host, port = parse_host_port(location)
+            if not host:
+                raise ValueError("no host")
+            if not 1 <= int(port) <= 65535:
+                raise ValueError(f"port {port} is not in 1 … 65535")
+    except ValueError as exc:
+        raise SceneError(name, f"must be {example}, got {address!r} ({exc})") from None
 
 
 @dataclass(frozen=True)
@@ -512,4 +546,7 @@ def override_run(run: RunOptions, backend, scheduler, workers, chunk) -> RunOpti
     if "scheduler" in given:
         table.pop("workers", None)
     merged = {**table, **given}
-    return RunOptions.parse(merged, "run (with the command-line options)") if given else run
+    if not given:
+        return run
+    named = "--scheduler" if "scheduler" in given else run.scheduler_field
+    return RunOptions.parse(merged, "run (with the command-line options)", named)

@@ -25,7 +25,8 @@ from typing import Any
 
 from ..core.files import WriteFailed
 from ..core.scene import Scene
-from ..core.signals import held_signals
+from ..core.signals import begin_work, held_signals
+from . import sweep_dask
 from .members import integrate_members, prepare_members, propagate_members, split
 from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
 from .sweep_result import (
@@ -115,7 +116,8 @@ def run_sweep(
         The HDF5 sweep file, written (:func:`~cayley_heyoka.core.files.write_hdf5`) when the
         sweep ends: a sweep stopped midway (an interruption, a lost cluster) leaves a
         readable file with what it computed, its other members marked ``NOT_RUN`` and
-        ``metadata["complete"]`` false.
+        ``metadata["complete"]`` false. One stopped before any member ended writes nothing:
+        a file already there stays as it was.
     backend, scheduler, workers, chunk
         Override the study's ``[run]`` table (see :class:`RunOptions`). ``chunk`` defaults to
         256 members locally and, on Dask, to a quarter of an even share per worker (at most
@@ -133,8 +135,11 @@ def run_sweep(
     TypeError
         ``study`` is not a :class:`~cayley_heyoka.workflows.study.Study`.
     SceneError
-        A member whose scene is invalid (naming the member, its values and the field), or bad
-        run options; raised before anything is integrated.
+        A member whose scene is invalid (naming the member, its values and the field), bad
+        run options, or a Dask scheduler that does not answer within
+        :data:`.sweep_dask.CONNECT_TIMEOUT` or has no worker (naming ``run.scheduler``, or
+        ``--scheduler`` for the ``scheduler`` argument); raised before anything is integrated
+        or written.
     """
     if not isinstance(study, Study):
         # The same rule as run(scene): a validated object, never a dictionary parsed here.
@@ -153,6 +158,9 @@ def run_sweep(
     layout = layout_of(study)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
+    # The cluster first: a scheduler that cannot be reached is refused before anything is
+    # integrated or written.
+    cluster = sweep_dask.connect(run) if run.backend == "dask" else None
     paths: Counter = Counter()
     why: dict[str, str] = {}
     compile_seconds = 0.0
@@ -162,6 +170,9 @@ def run_sweep(
 
     def take(part: Chunk) -> None:
         nonlocal compile_seconds, done
+        # Something to keep from here on: a signal stops the sweep, which writes what it
+        # computed (before, it ends the process at once: :mod:`~cayley_heyoka.core.signals`).
+        begin_work()
         fill_chunk(result, part, prec)
         paths.update(part.paths)
         why.update(part.why)
@@ -180,17 +191,18 @@ def run_sweep(
             info["chunk"] = size
             _pipeline(study, indexed, layout, threads, size, scenes, take)
         else:
-            from . import sweep_dask
-
-            info.update(sweep_dask.propagate(study, indexed, layout, run, take))
+            info.update(sweep_dask.propagate(cluster, study, indexed, layout, run, take))
     except BaseException as exc:
         stopped = f"{type(exc).__name__}: {exc}"
         raise
     finally:
+        if cluster is not None:
+            cluster.close()
         from ..core.result import versions
 
         # Also when the sweep stopped midway (a second Ctrl-C included): what it computed
-        # is kept.
+        # is kept. A sweep that stopped before any member ended has nothing to keep: the
+        # file already at ``out`` (a completed sweep, perhaps) stays as it was.
         with held_signals():
             result.metadata = {
                 **versions(),
@@ -202,7 +214,7 @@ def run_sweep(
                 "complete": stopped is None,
                 "stopped": stopped,
             }
-            if out is not None:
+            if out is not None and done:
                 try:
                     result.save(out)
                 except WriteFailed as exc:
