@@ -535,7 +535,7 @@ class Propagation:
             return False  # the parameters may hold a signal's poison: stop, reported after
         t = ta.time
         if self._next_row is not None and self._next_row <= t:
-            self._pass_rows(t)
+            self._pass_rows(ta.dtime)
         spec = self.terminal[index]
         stop = spec.handle(ta, self._pars)
         self._ta_pars[:] = self._pars[: self._held]
@@ -553,11 +553,12 @@ class Propagation:
             self._stop_stepping()
         return True
 
-    def _pass_rows(self, t: Any) -> None:
-        """The output rows up to ``t`` (a terminal event's time) were computed before its
-        handler: they keep the parameters in force now (a row exactly at ``t`` too)."""
+    def _pass_rows(self, dtime: tuple[Any, Any]) -> None:
+        """The output rows up to ``dtime`` (a terminal event's double-length time) were
+        computed before its handler: they keep the parameters in force now (a row exactly at
+        the event too)."""
         rows, given = self._rows, self._rows_pars
-        pass_rows(rows, given, t, self._pars)
+        pass_rows(rows, given, dtime, self._pars)
         self._next_row = rows[len(given)] if len(given) < len(rows) else None
 
     def snapshot(self) -> dict[str, Any]:
@@ -690,12 +691,26 @@ def _ending_at(prec: Precision, points: np.ndarray, t: Any) -> np.ndarray:
     return prec.array([*points, t])
 
 
-def pass_rows(rows: np.ndarray, given: list[np.ndarray], t: Any, pars: np.ndarray) -> None:
-    """Give the output rows up to ``t`` (a terminal event's time; increasing ``rows``, the
-    first ``len(given)`` already given) a copy of ``pars``: they were computed before the
-    event's handler changes the parameters (a row exactly at ``t`` too)."""
-    while len(given) < len(rows) and rows[len(given)] <= t:
+def pass_rows(
+    rows: np.ndarray, given: list[np.ndarray], dtime: tuple[Any, Any], pars: np.ndarray
+) -> None:
+    """Give the output rows up to ``dtime`` (a terminal event's time as heyoka keeps it, high
+    and low parts; increasing ``rows``, the first ``len(given)`` already given) a copy of
+    ``pars``: they were computed before the event's handler changes the parameters (a row
+    exactly at the event too).
+
+    The comparison is heyoka's own, in double-length time: where the time's last bit is
+    coarse (t ≈ 1e15 in double) an event a little before an output time can have that time
+    as its high part, and the row then comes after the handler.
+    """
+    hi, lo = dtime
+    while len(given) < len(rows) and _not_after(rows[len(given)], hi, lo):
         given.append(pars.copy())
+
+
+def _not_after(row: Any, hi: Any, lo: Any) -> bool:
+    """Whether the output time ``row`` is at or before the double-length time ``hi + lo``."""
+    return bool(row < hi or (row == hi and not lo < 0))
 
 
 class _ProgressCallback:

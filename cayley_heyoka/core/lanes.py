@@ -682,7 +682,8 @@ class _Lanes:
             raise RuntimeError(f"lane {lane} reached a terminal event with no member")
         t = ta.time[lane]
         if m.rows is not None:
-            engine.pass_rows(m.rows, m.rows_pars, t, m.pars)
+            hi, lo = ta.dtime
+            engine.pass_rows(m.rows, m.rows_pars, (hi[lane], lo[lane]), m.pars)
         spec = m.terminal[index]
         stop = spec.handle(_LaneView(ta, lane), m.pars)
         ta.pars[:, lane] = m.pars[: self.held]

@@ -269,3 +269,34 @@ def test_long_run_drift_follows_brouwer(formulation):
     for name in result.conserved:
         worst = float(np.max(np.abs(result.drift(name))))
         assert worst < 30 * 2.0**-52 * np.sqrt(steps), (name, worst)
+
+
+# A rebasing just before an output time whose double is coarse (ulp 0.125 near 1e15) has that
+# time as its high part: the row comes after the handler, so it must take the new chart base.
+_LATE = {
+    "body": {"inertia": ["1", "1.5", "2.5"]},
+    "initial": {"rates": ["0.125", "0.25", "1"], "rodrigues": ["0.1", "0.2", "-0.3"]},
+    "attitude": {"formulation": "rodrigues"},
+    "output": {"times": {"start": "1e15", "stop": "1000000000000100", "count": 65}},
+}
+
+
+def test_rows_beside_a_rebasing_at_a_coarse_time_take_the_right_chart_base():
+    result = run(Scene.from_dict(_LATE))
+    assert result.counters["rebasings"] > 10
+    assert np.max(np.abs(result.drift("momentum_space"))) < 1e-13
+
+
+def test_sweep_members_beside_a_rebasing_at_a_coarse_time_take_the_right_chart_base():
+    from cayley_heyoka.workflows.study import Study
+    from cayley_heyoka.workflows.sweep import run_sweep
+
+    study = Study.from_dict(
+        {
+            "scene": _LATE,
+            "sweep": {"kind": "grid", "parameters": {"initial.rates[0]": ["0.125", "0.126"]}},
+        }
+    )
+    sweep = run_sweep(study, workers=1)
+    assert np.all(sweep.status == 0)
+    assert np.max(np.abs(sweep.drift["momentum_space"])) < 1e-13
