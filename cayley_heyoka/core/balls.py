@@ -18,12 +18,14 @@ import mpmath
 from flint import arb
 
 from .accuracy import to_mpf
+from .exact import upper
 
 __all__ = [
     "Enclosure",
     "ball",
     "bound",
     "exact_mid",
+    "gap_bound",
     "exact_rational",
     "scaled_bound",
     "to_ball",
@@ -81,6 +83,12 @@ def exact_rational(x: mpmath.mpf) -> Fraction:
     """An mpmath number's exact rational value (a time difference without rounding)."""
     sign, man, exp, _ = x._mpf_  # (mpmath's man_exp drops the sign)
     return (-1 if sign else 1) * Fraction(int(man)) * Fraction(2) ** int(exp)
+
+
+def gap_bound(value: object, exact: arb) -> float:
+    """A float proved to bound ``|value − x|`` for the number ``x`` that the ball ``exact``
+    holds (Arb's upper bound of the difference, rounded up): the error of a written value."""
+    return upper(_exact((ball(value) - exact).abs_upper()))
 
 
 def to_ball(value: mpmath.mpf, radius: mpmath.mpf) -> arb:

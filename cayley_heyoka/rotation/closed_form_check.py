@@ -24,7 +24,6 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.certificate import exact_values
 from ..core.consistency import (
     CheckOptions,
     CheckReport,
@@ -32,6 +31,7 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.exact import difference
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
 from .attitude import quaternion_multiply
@@ -331,12 +331,7 @@ def _check_poisson_twin(scene: Scene, why: str) -> CheckReport:
         for j, name in enumerate(GAMMA)
     }
     a, b = run(own), run(Scene.from_dict(data))
-    errors = {}
-    with mpmath.workdps(prec.dps + 5):
-        for name in ("p", "q", "r", *GAMMA):
-            mine = exact_values(np.ravel(a[name]), prec)
-            theirs = exact_values(np.ravel(b[name]), prec)
-            errors[name] = np.array([float(abs(x - y)) for x, y in zip(mine, theirs, strict=True)])
+    errors = {name: difference(a[name], b[name]) for name in ("p", "q", "r", *GAMMA)}
     steps = int(a.counters.get("steps", 0)) + int(b.counters.get("steps", 0))
     tolerance = own.integrator.tolerance
     K = round_off_scale(steps, prec.epsilon, None if tolerance is None else float(tolerance))

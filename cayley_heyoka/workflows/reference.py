@@ -59,6 +59,7 @@ from ..core.certificate import (
     label,
     next_precision,
     precision_for,
+    uncovered,
 )
 from ..core.closed_form import ClosedForm, with_precision
 from ..core.families import FAMILIES
@@ -90,6 +91,9 @@ class ReferenceOutcome:
     certificate: Certificate
     precision: Precision
     attempts: list[dict[str, Any]]
+    #: The variables and monitors written without an error bound (the file is then not
+    #: certified, whatever the digits of the others).
+    uncovered: tuple[str, ...] = ()
 
 
 def generate_reference(
@@ -204,6 +208,10 @@ def generate_reference(
                 "give (it gives the state, the attitude and the conserved monitors); use "
                 "'integrate'"
             )
+    if closed is not None and evaluated is None and closed.job(first) is None:
+        # The closed form lacks some output the file writes (a user monitor, an output it
+        # does not give): it cannot certify the file, a second precision can.
+        closed = None
     check_destination(out, "result", overwrite=overwrite)
     _claim_workdir(workdir)
     if evaluated is not None:
@@ -297,10 +305,12 @@ def generate_reference(
         started,
         stretches=stretches,
     )
-    _write(out, written, cert, digits, certified, metadata)
+    missing = _write(out, written, cert, digits, certified, metadata)
     if not keep_work:
         _remove_workdir(workdir)
-    return ReferenceOutcome(out, certified, cert, written.precision, attempts)
+    return ReferenceOutcome(
+        out, certified and not missing, cert, written.precision, attempts, missing
+    )
 
 
 def _closed_form_reference(
@@ -353,8 +363,8 @@ def _closed_form_reference(
     metadata = _metadata(
         scene, command, "closed form", digits, certified, prec, attempts, max_bits, started
     )
-    _write(out, result, cert, digits, certified, metadata)
-    return ReferenceOutcome(out, certified, cert, prec, attempts)
+    missing = _write(out, result, cert, digits, certified, metadata)
+    return ReferenceOutcome(out, certified and not missing, cert, prec, attempts, missing)
 
 
 # ---------------------------------------------------------------------- certificates
@@ -422,24 +432,38 @@ def _where(cert: Certificate) -> str:
     error is of its time, at no output time)."""
     name, at = cert.worst
     where = f"{name} at t = {at:.6g}" if math.isfinite(at) else name
-    if not math.isfinite(cert.scaled) and name in ("lambda", "mu", "nu"):
-        where += (
+    if math.isfinite(cert.scaled):
+        return where
+    if name in ("lambda", "mu", "nu"):
+        return where + (
             ": unbounded, as λ, μ, ν are where the body is a half-turn from the space frame "
             "(w = 0); choose output times away from it"
         )
-    return where
+    return where + (
+        ": unbounded, the value is undefined (NaN) or infinite in one of the results compared "
+        "and not in the other"
+    )
 
 
 def _write(
     out: Path, result: Any, cert: Certificate, digits: int, certified: bool, meta: dict
-) -> None:
+) -> tuple[str, ...]:
+    """Write the reference file: ``result`` and ``cert``. A variable or monitor the
+    certificate gives no error for makes the file uncertified and unproved, and is named in
+    the certificate's ``uncovered`` (:func:`cayley_heyoka.core.certificate.uncovered`).
+    Returns those names."""
+    missing = uncovered(cert, result)
+    if missing:
+        certified = False
+        meta = {**meta, "certified": False}
     result.metadata = {**result.metadata, "reference": meta}
 
     def fill(f: Any) -> None:
         result.fill(f)
         g = f.create_group("certificate")
         g.attrs["method"] = cert.method
-        g.attrs["proved"] = cert.proved
+        g.attrs["proved"] = cert.proved and not missing
+        g.attrs["uncovered"] = json.dumps(list(missing))
         g.attrs["compared_with"] = cert.compared_with
         g.attrs["digits_requested"] = digits
         g.attrs["digits_certified"] = cert.digits()
@@ -449,7 +473,8 @@ def _write(
         g.attrs["scaling"] = "absolute where |value| <= 1, relative above"
         for name, err in cert.errors.items():
             ds = g.create_dataset(name, data=err)
-            ds.attrs["long_name"] = f"scaled error bound of {name}"
+            kind = "proved bound of the absolute error" if cert.proved else "absolute error"
+            ds.attrs["long_name"] = f"{kind} of {name}"
             if ds.ndim and ds.shape[0] == len(result.t):  # over the output times
                 ds.dims[0].attach_scale(f["time"])
         ge = g.create_group("events")
@@ -457,6 +482,7 @@ def _write(
             ge.create_dataset(name, data=err)
 
     write_hdf5(out, fill)
+    return missing
 
 
 def _claim_workdir(workdir: Path) -> None:
