@@ -15,9 +15,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import mpmath
+
+from .exact import exact
 
 __all__ = [
     "Certified",
@@ -67,9 +68,10 @@ class Certified:
 def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
     """Convert an input number *exactly*: decimal text at the current precision, floats exactly.
 
-    Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float is
-    taken at its exact binary value, never through ``str``, and so is a heyoka ``real128`` or
-    ``real`` (a quad or MPFR result's times and states).
+    Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float,
+    an integer and a heyoka ``real128`` or ``real`` (a quad or MPFR result's times and states)
+    are taken at their exact binary value, whatever the current precision, never through
+    ``str`` (:func:`cayley_heyoka.core.exact.exact`).
     """
     if isinstance(x, bool):
         raise TypeError(f"{name}: expected a number, got a bool")
@@ -78,17 +80,19 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
             value = mpmath.mpf(x.strip())
         except (ValueError, TypeError) as exc:
             raise ValueError(f"{name}: {x!r} is not a number") from exc
-    elif type(x).__module__.startswith("heyoka") and type(x).__name__ in ("real128", "real"):
-        # A quad or MPFR number (a result's time or state): its decimal text round-trips, so
-        # reading it at the number's own bits gives it back exactly.
-        number: Any = x
-        bits = 113 if type(x).__name__ == "real128" else int(number.prec)
-        with mpmath.workprec(bits):
-            value = mpmath.mpf(str(x))
-    else:
-        try:
+    elif isinstance(x, mpmath.mpf):
+        value = x  # as it is: mpmath.mpf(x) would round it to the current precision
+    elif type(x).__module__.startswith("mpmath"):
+        try:  # a constant (mpmath.pi), evaluated at the current precision
             value = mpmath.mpf(x)
         except (ValueError, TypeError) as exc:
+            raise TypeError(f"{name}: {x!r} is not a real number") from exc
+    else:
+        # A number at its exact binary value whatever mpmath's precision (mpmath.mpf(x)
+        # would round it to that): a float, an integer, a quad or MPFR result's number.
+        try:
+            value = exact(x)
+        except TypeError as exc:
             raise TypeError(f"{name}: {x!r} is not a real number") from exc
     if not mpmath.isfinite(value):
         raise ValueError(f"{name} must be finite, got {x!r}")

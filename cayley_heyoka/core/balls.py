@@ -111,5 +111,6 @@ class Enclosure:
         radius = self.bounds[name]
         if radius == 0:
             return math.inf
-        scale = max(abs(self.values[name]), mpmath.mpf(1))
-        return float(-mpmath.log10(radius / scale))
+        with mpmath.workprec(64):
+            scale = max(abs(self.values[name]), mpmath.mpf(1))
+            return float(-mpmath.log10(radius / scale))

@@ -30,7 +30,7 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
-from ..core.exact import difference
+from ..core.exact import difference, exact
 from ..core.scene import Scene
 from ..mechanics import kepler as el
 from .scene import FORMULATIONS
@@ -39,7 +39,9 @@ __all__ = ["TWINS", "check_orbit", "check_twin"]
 
 #: What a scene can be checked against: another formulation, or its own at a higher precision.
 TWINS = (*FORMULATIONS, "precision")
-_SENSITIVITY_DPS, _DELTA = 40, mpmath.mpf("1e-15")
+#: Digits of the sensitivity's Kepler orbits, and the relative move of the initial state
+#: (text: read in their working precision).
+_SENSITIVITY_DPS, _DELTA = 40, "1e-15"
 _SENSITIVITY_TIMES = 16
 _STATE = ("x", "y", "z", "vx", "vy", "vz")
 
@@ -141,8 +143,9 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     orbit = scene.model
     t0 = scene.output.time_grid(scene.integrator.precision)[0]
     with mpmath.workdps(_SENSITIVITY_DPS):
+        delta = mpmath.mpf(_DELTA)
         mu = scene_mpf(orbit.mu)
-        x0, v0 = initial_cartesian(orbit, mpmath.mpf(str(t0)))
+        x0, v0 = initial_cartesian(orbit, exact(t0))
         start = el.cartesian_to_elements(x0, v0, mu)
         if not 0 <= start.e < 1:
             raise ValueError(
@@ -154,9 +157,9 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
         for i in range(6):
             x, v = list(x0), list(v0)
             if i < 3:
-                x[i] += _DELTA * sizes[0]
+                x[i] += delta * sizes[0]
             else:
-                v[i - 3] += _DELTA * sizes[1]
+                v[i - 3] += delta * sizes[1]
             moves.append(el.cartesian_to_elements(x, v, mu))
         times = [
             mpmath.mpf(span) * k / _SENSITIVITY_TIMES for k in range(1, _SENSITIVITY_TIMES + 1)
@@ -168,5 +171,5 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
             x, v = el.elements_to_cartesian(moved, mu)
             return {"position": list(x), "velocity": list(v)}
 
-        measured = flow_sensitivity(evaluate, 6, times, _DELTA)
+        measured = flow_sensitivity(evaluate, 6, times, delta)
     return measured

@@ -23,7 +23,8 @@ reference plane, are NaN there (``c/c``: 1 untilted, 0/0 tilted).
 Back on the reference plane they resume within a whole turn of their values before the tilt.
 
 The hand-over itself is computed in mpmath at the run's precision plus guard digits, from the
-state's exact values, and rounded once into the run's type: it happens once per passage.
+state's exact values (:func:`cayley_heyoka.core.exact.exact`), and rounded once into the run's
+type: it happens once per passage.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from typing import Any
 
 import mpmath
 
+from ..core.exact import exact_array
 from ..core.model import Handover, ParTable
 from ..core.precision import Precision
 from ..mechanics import frames
@@ -92,7 +94,7 @@ class EquatorialHandover:
         prec = self.precision
         state = ta.state
         with mpmath.workdps(prec.dps + 20):
-            Theta, Sigma, Phi = (mpmath.mpf(t) for t in prec.to_text(state[_ANGLES]))
+            Theta, Sigma, Phi = exact_array(state[_ANGLES])
             current = LEVEL if self.to == TILTED else TILTED
             new = list(angles_in(self.to, Theta, Sigma, Phi, current))
             j = self._before
@@ -100,7 +102,7 @@ class EquatorialHandover:
                 values = [Theta, Sigma]
             else:
                 # Back within a turn of Θ, Σ before the tilt: slow node drifts read on.
-                before = [mpmath.mpf(t) for t in prec.to_text(pars[j : j + 2])]
+                before = exact_array(pars[j : j + 2])
                 turn = 2 * mpmath.pi
                 for i in (0, 1):
                     new[i] += turn * mpmath.nint((before[i] - new[i]) / turn)

@@ -31,7 +31,7 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
-from ..core.exact import difference
+from ..core.exact import difference, exact_array
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
 from .attitude import quaternion_multiply
@@ -39,7 +39,9 @@ from .attitude import quaternion_multiply
 __all__ = ["check_closed_form", "check_rotation", "check_twin"]
 
 #: Digits of the closed form in the sensitivity, and the perturbation it measures it with.
-_SENSITIVITY_DPS, _DELTA = 30, mpmath.mpf("1e-12")
+#: Digits of the sensitivity's closed forms, and the relative move of the initial state
+#: (text: read in their working precision).
+_SENSITIVITY_DPS, _DELTA = 30, "1e-12"
 #: Times at which the sensitivity is measured, evenly over the span (it grows with t).
 _SENSITIVITY_TIMES = 16
 
@@ -422,12 +424,13 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     with mpmath.workdps(dps + 10):
         rates = [scene_mpf(x) for x in body.rates]
         size = mpmath.sqrt(sum(x * x for x in rates))
-        q0 = [mpmath.mpf(str(c)) for c in body.initial_quaternion(Precision("real", 4 * dps))]
-        half = _DELTA / 2
+        q0 = exact_array(body.initial_quaternion(Precision("real", 4 * dps)))
+        delta = mpmath.mpf(_DELTA)
+        half = delta / 2
         starts = []
         for axis in range(3):
             moved = list(rates)
-            moved[axis] += _DELTA * size
+            moved[axis] += delta * size
             starts.append((moved, q0))
         for axis in range(3):
             turn = [mpmath.cos(half), 0, 0, 0]
@@ -452,7 +455,7 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
             out.update(dict(zip("wxyz", state.quaternion, strict=True)))
             return out
 
-        measured = flow_sensitivity(evaluate, 6, times, _DELTA)
+        measured = flow_sensitivity(evaluate, 6, times, delta)
     return {
         "rates": max(measured[n] for n in "pqr"),
         "quaternion": max(measured[n] for n in "wxyz"),
