@@ -67,7 +67,10 @@ def assert_trajectory_close(
     ``cayley-heyoka reference``; zero when absent) — a proved bound for a closed-form reference
     (the free body, the projectile: ``certificate.proved``), an estimate otherwise. Differences
     are computed in the higher of the two precisions, from the exact values, so a quad run
-    compared with a quad reference resolves differences far below double's ε.
+    compared with a quad reference resolves differences far below double's ε. A value that
+    is NaN in both (undefined there by design: an orbit's Θ and Σ on the tilted frame,
+    docs/orbits.md) agrees; one that is NaN in one of them only fails
+    (:mod:`cayley_heyoka.core.exact`).
 
     Parameters
     ----------
@@ -486,8 +489,9 @@ def assert_drift_within(
     ------
     AssertionError
         A window exceeds its allowance (the message gives the monitor, window, measured and
-        golden drift, their ratio and the allowance), or the two cannot be compared (other
-        precision, other conserved monitors, a window without output times).
+        golden drift, their ratio and the allowance; a window NaN in both agrees, NaN in one
+        only exceeds), or the two cannot be compared (other precision, other conserved
+        monitors, a window without output times).
     """
     __tracebackhide__ = True
     factor = _nonneg_number(factor, "factor")
