@@ -65,7 +65,7 @@ class ProjectileClosedForm(ClosedForm):
         dps = digits + 10
         t = result.t
         names = [n for n in ProjectileJob.VARIABLES if n in result.variables]
-        monitors = [n for n in ProjectileJob.MONITORS if n in result.monitors]
+        monitors = [n for n in ProjectileJob.MONITORS if n in getattr(result, "monitors", {})]
         cols: dict[str, list[float]] = {n: [] for n in names + monitors}
         times = exact_array(t)
         columns = {n: exact_array(result.variables[n]) for n in names}

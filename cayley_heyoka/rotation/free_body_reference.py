@@ -98,7 +98,7 @@ class FreeBodyClosedForm(ClosedForm):
         exact = free_body(body.inertia, body.rates, body.attitude, dps)
         t = result.t
         names = [n for n in FreeBodyJob.VARIABLES if n in result.variables]
-        monitors = [n for n in FreeBodyJob.MONITORS if n in result.monitors]
+        monitors = [n for n in FreeBodyJob.MONITORS if n in getattr(result, "monitors", {})]
         cols: dict[str, list[Any]] = {n: [] for n in names + monitors}
         times = exact_array(t)
         columns = {n: exact_array(result.variables[n]) for n in names}
