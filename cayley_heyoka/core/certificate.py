@@ -56,7 +56,9 @@ class Certificate:
     compared_with
         What the solution was compared with (the closed form's name, or the other precision).
     errors
-        Estimated absolute error of each variable at each output time.
+        Absolute error of each variable and monitor at each output time (shape of its
+        array; 0 where the value is undefined, NaN, in both results compared). A certificate
+        of a file covers every array the file holds (:func:`uncovered`).
     event_errors
         Estimated absolute error of each recorded event's times.
     proved
