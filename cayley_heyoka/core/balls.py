@@ -87,8 +87,14 @@ def exact_rational(x: mpmath.mpf) -> Fraction:
 
 def gap_bound(value: object, exact: arb) -> float:
     """A float proved to bound ``|value − x|`` for the number ``x`` that the ball ``exact``
-    holds (Arb's upper bound of the difference, rounded up): the error of a written value."""
-    return upper(_exact((ball(value) - exact).abs_upper()))
+    holds (Arb's upper bound of the difference, rounded up): the error of a written value.
+    Computed at the bits of both midpoints, not at python-flint's global precision."""
+    from flint import ctx
+
+    x = ball(value)
+    bits = sum(int(b.mid().man_exp()[0]).bit_length() for b in (x, exact)) + 64
+    with ctx.workprec(bits):
+        return upper(_exact((x - exact).abs_upper()))
 
 
 def to_ball(value: mpmath.mpf, radius: mpmath.mpf) -> arb:

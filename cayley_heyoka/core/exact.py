@@ -98,7 +98,9 @@ def _gap(x: mpmath.mpf, y: mpmath.mpf) -> float:
         return 0.0 if mpmath.isnan(x) and mpmath.isnan(y) else np.inf
     if mpmath.isinf(x) or mpmath.isinf(y):
         return 0.0 if x == y else np.inf
-    return upper(abs(mpmath.fsub(x, y, exact=True)))
+    # Exact subtraction and sign: abs() would round to mpmath's global precision.
+    d = mpmath.fsub(x, y, exact=True)
+    return upper(d if d >= 0 else mpmath.fneg(d, exact=True))
 
 
 def upper(x: mpmath.mpf) -> float:

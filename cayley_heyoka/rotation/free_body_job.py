@@ -57,7 +57,6 @@ class FreeBodyJob:
         body = self.body()
         t0 = self.rounding.read(self.t0)
         rnd = self.rounding
-        inertia = [ball(m, "body.inertia") for m in self.inertia]
 
         def at(text: str) -> Row:
             with mpmath.workdps(self.dps + 30):
@@ -76,7 +75,7 @@ class FreeBodyJob:
                     # digits: both are short binary numbers) and this subtraction's rounding.
                     gap = abs(written - v)
                     errors[name] = upper(s.bounds[name] + gap * (1 + 2 * mpmath.eps))
-            exact = monitor_balls(self.monitors, s, inertia, self.dps)
+            exact = monitor_balls(self.monitors, s, self.inertia, self.dps)
             for name, value in exact.items():
                 if isinstance(value, list):
                     texts = [rnd.write(exact_mid(c)) for c in value]
@@ -91,17 +90,20 @@ class FreeBodyJob:
 
 
 def monitor_balls(
-    names: Sequence[str], s: Any, inertia: Sequence[arb], dps: int
+    names: Sequence[str], s: Any, moments: Sequence[object], dps: int
 ) -> dict[str, arb | list[arb]]:
     """The monitors ``names`` of the exact motion, each as a ball (a list for a vector) that
     provably holds it: from the rates and quaternion of the enclosure ``s``, balls of their
-    proved bounds, and the exact moments ``inertia``. A rotation's orthogonality defect is 0."""
+    proved bounds, and the moments as the scene states them. A rotation's orthogonality
+    defect is 0. In Arb at ``dps`` digits and 64 bits more (not python-flint's global
+    precision)."""
     from flint import ctx
 
     from .attitude import quaternion_to_matrix
 
     out: dict[str, arb | list[arb]] = {}
     with ctx.workprec(math.ceil(dps * math.log2(10)) + 64):
+        inertia = [ball(m, "body.inertia") for m in moments]
         w = [to_ball(s.values[n], s.bounds[n]) for n in "pqr"]
         L = [m * x for m, x in zip(inertia, w, strict=True)]
         for name in names:

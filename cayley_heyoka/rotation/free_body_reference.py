@@ -89,7 +89,7 @@ class FreeBodyClosedForm(ClosedForm):
         invariable-plane crossing."""
         import mpmath
 
-        from ..core.balls import ball, exact_rational, gap_bound
+        from ..core.balls import exact_rational, gap_bound
         from .free_body_job import FreeBodyJob, free_body, monitor_balls
 
         body = self.scene.model
@@ -102,7 +102,6 @@ class FreeBodyClosedForm(ClosedForm):
         cols: dict[str, list[Any]] = {n: [] for n in names + monitors}
         times = exact_array(t)
         columns = {n: exact_array(result.variables[n]) for n in names}
-        inertia = [ball(m, "body.inertia") for m in body.inertia]
         with mpmath.workdps(dps + 10):
             t0 = times[0]
             for k in range(len(t)):
@@ -120,7 +119,7 @@ class FreeBodyClosedForm(ClosedForm):
                     # sign taken for q does not matter), and the subtraction's rounding.
                     rounding = 4 * mpmath.eps * (abs(want[n]) + abs(got[n]))
                     cols[n].append(upper(abs(got[n] - want[n]) + s.bounds[n] + rounding))
-                for n, value in monitor_balls(monitors, s, inertia, dps).items():
+                for n, value in monitor_balls(monitors, s, body.inertia, dps).items():
                     run = np.ravel(result.monitors[n][k])
                     if isinstance(value, list):
                         cols[n].append([gap_bound(x, c) for x, c in zip(run, value, strict=True)])
