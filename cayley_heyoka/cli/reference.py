@@ -158,6 +158,8 @@ def _reference(args: argparse.Namespace) -> int:
         f"{verdict}: {cert.digits_text()} of {args.digits} requested "
         f"({label(outcome.precision)}, {cert.method}: {cert.compared_with})"
     )
+    if outcome.uncovered:
+        print(f"the certificate gives no error for: {', '.join(outcome.uncovered)}")
     print(f"reference written to {outcome.path}")
     return 0 if outcome.certified else 1
 

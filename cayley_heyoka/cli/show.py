@@ -178,4 +178,6 @@ def _sci(value: Any) -> str:
         return f"{x:.3e}"
     import mpmath
 
-    return mpmath.nstr(mpmath.mpf(str(value)), 4, min_fixed=0, max_fixed=0)
+    from ..core.exact import exact
+
+    return mpmath.nstr(exact(value), 4, min_fixed=0, max_fixed=0)

@@ -17,12 +17,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from decimal import Decimal
 from fractions import Fraction
-from typing import Any
 
 import mpmath
-import numpy as np
 
-from .precision import NUMBER_KINDS, as_number, rational_mpf
+from .exact import exact
+from .precision import NUMBER_KINDS, rational_mpf
 
 __all__ = [
     "Certified",
@@ -72,11 +71,12 @@ class Certified:
 def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
     """Convert an input number *exactly*: decimal text at the current precision, floats exactly.
 
-    Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float is
-    taken at its exact binary value, never through ``str``, and so are a numpy float (float16
-    to longdouble) and a heyoka ``real128`` or ``real`` (a quad or MPFR result's times and
-    states); a ``Fraction`` or ``Decimal`` is correctly rounded at the current precision, a
-    numpy integer is an int (the kinds of :func:`~cayley_heyoka.core.precision.as_number`).
+    Strings are the recommended input (``"0.1"`` is one tenth at any precision); a Python float,
+    an integer, a numpy number (float16 to longdouble) and a heyoka ``real128`` or ``real`` (a
+    quad or MPFR result's times and states) are taken at their exact binary value, whatever
+    the current precision, never through ``str`` (:func:`cayley_heyoka.core.exact.exact`); a
+    ``Fraction`` or ``Decimal`` is correctly rounded at the current precision (the kinds of
+    :func:`~cayley_heyoka.core.precision.as_number`).
     """
     if isinstance(x, bool):
         raise TypeError(f"{name}: expected a number, got a bool")
@@ -85,29 +85,23 @@ def to_mpf(x: object, name: str = "value") -> mpmath.mpf:
             value = mpmath.mpf(x.strip())
         except (ValueError, TypeError) as exc:
             raise ValueError(f"{name}: {x!r} is not a number") from exc
-    elif type(x).__module__.startswith("heyoka") and type(x).__name__ in ("real128", "real"):
-        # A quad or MPFR number (a result's time or state): its decimal text round-trips, so
-        # reading it at the number's own bits gives it back exactly.
-        number: Any = x
-        bits = 113 if type(x).__name__ == "real128" else int(number.prec)
-        with mpmath.workprec(bits):
-            value = mpmath.mpf(str(x))
+    elif isinstance(x, mpmath.mpf):
+        value = x  # as it is: mpmath.mpf(x) would round it to the current precision
+    elif type(x).__module__.startswith("mpmath"):
+        try:  # a constant (mpmath.pi), evaluated at the current precision
+            value = mpmath.mpf(x)
+        except (ValueError, TypeError) as exc:
+            raise TypeError(f"{name}: {x!r} is not a real number") from exc
     elif isinstance(x, Fraction):
         value = rational_mpf(x)
     elif isinstance(x, Decimal):
         value = rational_mpf(Fraction(x)) if x.is_finite() else mpmath.nan
-    elif isinstance(x, np.floating) and x.dtype.itemsize > 8:
-        if not np.isfinite(x):
-            raise ValueError(f"{name} must be finite, got {x!r}")
-        m, d = x.as_integer_ratio()  # d is a power of two: the division is exact
-        with mpmath.workprec(max(mpmath.mp.prec, m.bit_length())):
-            value = mpmath.mpf(m) / d
     else:
-        if isinstance(x, np.number):
-            x = as_number(x) if np.isfinite(x) else float(x)  # an int or a float, exactly
+        # A number at its exact binary value whatever mpmath's precision (mpmath.mpf(x)
+        # would round it to that): a float, an integer, a quad or MPFR result's number.
         try:
-            value = mpmath.mpf(x)
-        except (ValueError, TypeError) as exc:
+            value = exact(x)
+        except TypeError as exc:
             raise TypeError(f"{name}: {x!r} is not a real number ({NUMBER_KINDS})") from exc
     if not mpmath.isfinite(value):
         raise ValueError(f"{name} must be finite, got {x!r}")

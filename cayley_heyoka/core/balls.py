@@ -20,12 +20,14 @@ import numpy as np
 from flint import arb
 
 from .accuracy import to_mpf
+from .exact import upper
 
 __all__ = [
     "Enclosure",
     "ball",
     "bound",
     "exact_mid",
+    "gap_bound",
     "exact_rational",
     "scaled_bound",
     "to_ball",
@@ -89,6 +91,18 @@ def exact_rational(x: mpmath.mpf) -> Fraction:
     return (-1 if sign else 1) * Fraction(int(man)) * Fraction(2) ** int(exp)
 
 
+def gap_bound(value: object, exact: arb) -> float:
+    """A float proved to bound ``|value − x|`` for the number ``x`` that the ball ``exact``
+    holds (Arb's upper bound of the difference, rounded up): the error of a written value.
+    Computed at the bits of both midpoints, not at python-flint's global precision."""
+    from flint import ctx
+
+    x = ball(value)
+    bits = sum(int(b.mid().man_exp()[0]).bit_length() for b in (x, exact)) + 64
+    with ctx.workprec(bits):
+        return upper(_exact((x - exact).abs_upper()))
+
+
 def to_ball(value: mpmath.mpf, radius: mpmath.mpf) -> arb:
     """The ball ``[value ± radius]`` again, exactly (both are short binary numbers)."""
     return ball(value) + arb(0, ball(radius))
@@ -109,5 +123,6 @@ class Enclosure:
         radius = self.bounds[name]
         if radius == 0:
             return math.inf
-        scale = max(abs(self.values[name]), mpmath.mpf(1))
-        return float(-mpmath.log10(radius / scale))
+        with mpmath.workprec(64):
+            scale = max(abs(self.values[name]), mpmath.mpf(1))
+            return float(-mpmath.log10(radius / scale))

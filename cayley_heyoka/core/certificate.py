@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .evaluation import Rounding
+from .exact import difference
 from .precision import Precision
 
 BITS_PER_DIGIT = math.log2(10)
@@ -55,7 +56,9 @@ class Certificate:
     compared_with
         What the solution was compared with (the closed form's name, or the other precision).
     errors
-        Estimated absolute error of each variable at each output time.
+        Absolute error of each variable and monitor at each output time (shape of its
+        array; 0 where the value is undefined, NaN, in both results compared). A certificate
+        of a file covers every array the file holds (:func:`uncovered`).
     event_errors
         Estimated absolute error of each recorded event's times.
     proved
@@ -75,9 +78,12 @@ class Certificate:
     worst: tuple[str, float] = ("", 0.0)
 
     def digits_text(self) -> str:
-        """The digits for a message: "12.3 digits", or "no digits" for an unbounded error."""
+        """The digits for a message: "12.3 digits", "no digits" for an unbounded error, "every
+        digit" where no error was found (two runs that agree exactly)."""
         digits = self.digits()
-        return f"{digits:.1f} digits" if math.isfinite(digits) or digits > 0 else "no digits"
+        if math.isfinite(digits):
+            return f"{digits:.1f} digits"
+        return "every digit (no error found)" if digits > 0 else "no digits"
 
     def digits(self) -> float:
         """Decimal digits certified: -log10 of the largest scaled error."""
@@ -86,20 +92,25 @@ class Certificate:
 
 def _scaled(values: np.ndarray, errors: np.ndarray) -> np.ndarray:
     """Errors relative above 1 and absolute below; an unbounded error (an infinite value's,
-    λ at a half-turn) stays infinite instead of becoming ∞/∞ and being passed over."""
+    λ at a half-turn) stays infinite instead of becoming ∞/∞ and being passed over. A zero
+    error is zero whatever the value: that of a value undefined (NaN) in both runs compared
+    (:func:`cayley_heyoka.core.exact.difference`)."""
     with np.errstate(invalid="ignore", over="ignore"):
         mag = np.abs(np.asarray(values, dtype=float))
         scaled = errors / np.maximum(mag, 1.0)
-    return np.where(np.isnan(scaled) | np.isinf(errors), np.inf, scaled)
+    scaled = np.where(np.isnan(scaled) | np.isinf(errors), np.inf, scaled)
+    return np.where(errors == 0, 0.0, scaled)
 
 
 def worst(cert: Certificate, values: dict[str, np.ndarray], t: np.ndarray) -> Certificate:
+    """``cert`` with its largest scaled error and where it is, over ``values`` (by name: the
+    result's variables and monitors) at the output times ``t``."""
     best = (0.0, "", 0.0)
     for name, err in cert.errors.items():
         s = _scaled(values[name], err)
         if s.size and np.max(s) > best[0]:
-            k = int(np.argmax(s))
-            best = (float(s[k]), name, float(t[k]))
+            row = int(np.unravel_index(int(np.argmax(s)), s.shape)[0])  # a vector's row
+            best = (float(np.max(s)), name, float(t[row]))
     for name, err in cert.event_errors.items():
         if err.size and np.max(err) > best[0]:
             best = (float(np.max(err)), f"event {name}", math.nan)
@@ -107,37 +118,35 @@ def worst(cert: Certificate, values: dict[str, np.ndarray], t: np.ndarray) -> Ce
     return cert
 
 
-def difference_certificate(written: Any, other: Any) -> Certificate:
-    """The certificate of ``written`` from a less precise run ``other`` of the same scene."""
-    import mpmath
+def written(result: Any) -> dict[str, np.ndarray]:
+    """Every array a result file holds on its output times, by name: its variables and
+    monitors (what a certificate must cover; a thinned view may hold variables only)."""
+    return {**result.variables, **getattr(result, "monitors", {})}
 
-    errors = {}
-    with mpmath.workdps(written.precision.dps + 5):
-        for name, values in written.variables.items():
-            errors[name] = _abs_difference(
-                values, other.variables[name], written.precision, other.precision
+
+def uncovered(cert: Certificate, result: Any) -> tuple[str, ...]:
+    """The variables and monitors of ``result`` that ``cert`` gives no error for."""
+    return tuple(name for name in written(result) if name not in cert.errors)
+
+
+def difference_certificate(written_run: Any, other: Any) -> Certificate:
+    """The certificate of ``written_run`` from a less precise run ``other`` of the same scene:
+    the difference of every variable and monitor at every output time, and of every event
+    time (a value undefined in both runs agrees: :func:`cayley_heyoka.core.exact.difference`)."""
+    ours, theirs = written(written_run), written(other)
+    errors = {name: difference(values, theirs[name]) for name, values in ours.items()}
+    event_errors = {}
+    for name, log in written_run.events.items():
+        them = other.events.get(name)
+        if them is None or len(them) != len(log) or list(them.label) != list(log.label):
+            raise RuntimeError(
+                f"event {name!r}: {len(log)} occurrences in {written_run.precision.name}, "
+                f"{0 if them is None else len(them)} in {other.precision.name} — the "
+                "runs disagree on an event (one grazing zero?): no certificate"
             )
-        event_errors = {}
-        for name, log in written.events.items():
-            theirs = other.events.get(name)
-            if theirs is None or len(theirs) != len(log) or list(theirs.label) != list(log.label):
-                raise RuntimeError(
-                    f"event {name!r}: {len(log)} occurrences in {written.precision.name}, "
-                    f"{0 if theirs is None else len(theirs)} in {other.precision.name} — the "
-                    "runs disagree on an event (one grazing zero?): no certificate"
-                )
-            event_errors[name] = _abs_difference(
-                log.time, theirs.time, written.precision, other.precision
-            )
+        event_errors[name] = difference(log.time, them.time)
     cert = Certificate("two precisions", other.precision.name, errors, event_errors)
-    return worst(cert, written.variables, np.asarray(written.t, dtype=float))
-
-
-def _abs_difference(a: np.ndarray, b: np.ndarray, pa: Precision, pb: Precision) -> np.ndarray:
-    """|a - b| as float64, the subtraction done in mpmath on the operands' exact values."""
-    fa, fb = exact_values(np.ravel(a), pa), exact_values(np.ravel(b), pb)
-    out = np.array([float(abs(x - y)) for x, y in zip(fa, fb, strict=True)])
-    return out.reshape(np.shape(a))
+    return worst(cert, ours, np.asarray(written_run.t, dtype=float))
 
 
 def precision_of(result: Any) -> Precision:
@@ -148,13 +157,6 @@ def precision_of(result: Any) -> Precision:
     if isinstance(x, float | np.floating):
         return Precision("double")
     return Precision("real", x.prec) if hasattr(x, "prec") else Precision("quad")
-
-
-def exact_values(values: Any, prec: Precision) -> list[Any]:
-    """The exact values of numbers of ``prec``, as mpmath numbers (``str`` of a double is its
-    shortest decimal, which is not its value: up to half an ulp off)."""
-    rnd = rounding_of(prec)
-    return [rnd.read(x) for x in prec.to_text(np.asarray(values))]
 
 
 def rounding_of(prec: Precision) -> Rounding:

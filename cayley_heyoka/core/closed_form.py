@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .certificate import Certificate, worst
+from .certificate import Certificate, worst, written
 from .precision import Precision
 from .scene import Scene, with_options
 
@@ -121,9 +121,11 @@ class ClosedForm:
             scene=variant.to_dict(),
             metadata={**versions(), "wall_seconds": time.perf_counter() - wall},
         )
-        errors = {n: np.array([e[n] for _, e in rows]) for n in job.variables}
+        # Every variable and monitor written has its error: the job gives both.
+        names = (*job.variables, *job.monitors)
+        errors = {n: np.array([e[n] for _, e in rows], dtype=float) for n in names}
         cert = Certificate("closed form", self.name, errors, event_errors, self.proved)
-        return result, worst(cert, variables, np.asarray(grid, dtype=float)), resumed
+        return result, worst(cert, written(result), np.asarray(grid, dtype=float)), resumed
 
     def _events(self, job: Any, model: Any, prec: Precision, grid: np.ndarray) -> tuple[dict, dict]:
         return {}, {}

@@ -34,7 +34,7 @@ from .causes import check_sources, explain_start, start_failure
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .families import FAMILIES
-from .model import Handover, Model, own_terminal
+from .model import Handover, Model, call_handler, own_terminal
 from .precision import Precision, approx, exact_fraction
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, start_values
 from .result import Result, versions
@@ -537,7 +537,7 @@ class Propagation:
         if self._next_row is not None and self._next_row <= t:
             self._pass_rows(ta.dtime)
         spec = self.terminal[index]
-        stop = spec.handle(ta, self._pars)
+        stop = call_handler(spec, ta, self._pars, t)
         self._ta_pars[:] = self._pars[: self._held]
         self.counters[spec.counter] += 1
         if isinstance(stop, Handover):

@@ -45,8 +45,9 @@ _CHUNK = re.compile(r"chunk-\d{5}\.ckpt")
 #: What older versions saved (plain JSON, unchecked): never read back.
 _LEGACY = re.compile(r"job\.json|chunk-\d{5}\.json")
 
-#: What one output time gives: written values as text (vectors as lists), absolute errors.
-Row = tuple[dict[str, Any], dict[str, float]]
+#: What one output time gives: written values as text and their absolute errors, each a
+#: list for a vector monitor.
+Row = tuple[dict[str, Any], dict[str, Any]]
 
 
 @dataclass(frozen=True)
@@ -74,12 +75,6 @@ class Rounding:
             y = +x  # round to nearest
             text = repr(float(y)) if self.kind == "double" else mpmath.nstr(y, self.digits)
         return text, self.read(text)
-
-
-def upper(x: mpmath.mpf) -> float:
-    """``x`` as a float rounded up, so that an error bound stays a bound."""
-    f = float(x)
-    return f if f >= x else math.nextafter(f, math.inf)
 
 
 # ---------------------------------------------------------------------- in parallel

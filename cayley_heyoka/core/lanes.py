@@ -42,7 +42,7 @@ import heyoka as hy
 import numpy as np
 
 from . import compiler, engine, recording
-from .model import Handover, Model, TerminalSpec, own_terminal
+from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
 from .result import EventLog
 from .scene import IntegratorOptions
@@ -685,7 +685,7 @@ class _Lanes:
             hi, lo = ta.dtime
             engine.pass_rows(m.rows, m.rows_pars, (hi[lane], lo[lane]), m.pars)
         spec = m.terminal[index]
-        stop = spec.handle(_LaneView(ta, lane), m.pars)
+        stop = call_handler(spec, _LaneView(ta, lane), m.pars, t)
         ta.pars[:, lane] = m.pars[: self.held]
         m.counters[spec.counter] += 1
         if isinstance(stop, Handover):

@@ -168,6 +168,24 @@ class Handover:
     variant: str
 
 
+def call_handler(spec: TerminalSpec, integrator: Any, pars: Any, t: Any) -> str | Handover | None:
+    """``spec.handle(integrator, pars)`` at the event time ``t``: the one way the engine and
+    the batch lanes call a terminal handler.
+
+    A handler that cannot act on the state reached — an arithmetic error, or a value it
+    cannot take (an orbit no longer an ellipse, a NaN) — stops the run there as if it had
+    returned that as its message: the rows up to the event are kept, and nothing escapes
+    the engine. Any other exception is a fault of the handler and is raised.
+    """
+    try:
+        return spec.handle(integrator, pars)
+    except (ArithmeticError, ValueError) as exc:
+        return (
+            f"the terminal event {spec.counter!r} could not be handled at t = {t}: {exc}; "
+            "results kept up to there"
+        )
+
+
 def own_terminal(specs: Sequence[TerminalSpec]) -> list[TerminalSpec]:
     """``specs`` for one run: a handler that keeps state of its own between calls
     (``checkpoint``) is copied, so that runs of one model never share that state."""

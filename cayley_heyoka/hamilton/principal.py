@@ -29,8 +29,9 @@ import mpmath
 import numpy as np
 
 from ..core.consistency import CheckReport, CheckRow
+from ..core.exact import exact
 from ..core.families import FAMILIES
-from ..core.precision import Precision
+from ..core.precision import Precision, scene_mpf
 from ..core.scene import Scene
 
 
@@ -149,7 +150,7 @@ def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
     state = copy.copy(row[: 2 * n + 1])
     J = [[row[k] for k in range(s.start, s.stop)] for s in jac]
     with mpmath.workdps(prec.dps + 5):
-        to_mp = (lambda v: mpmath.mpf(float(v))) if prec.kind == "double" else _mpf
+        to_mp = exact  # the run's numbers, exactly
         A = mpmath.matrix([[to_mp(J[i][n + j]) for j in range(n)] for i in range(n)])  # ∂η/∂p
         B = mpmath.matrix([[to_mp(J[i][j]) for j in range(n)] for i in range(n)])  # ∂η/∂e
         sp = mpmath.matrix([to_mp(J[2 * n][n + j]) for j in range(n)])  # ∂S/∂p
@@ -164,7 +165,7 @@ def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
             return [np.nan, np.nan, np.nan, np.inf, size]
         d_eta = max(abs(y[i] - varpi[i]) for i in range(n))
         d_e_vec = se - B.T * y
-        d_e = max(abs(d_e_vec[i] + _mpf(p0[i])) for i in range(n))
+        d_e = max(abs(d_e_vec[i] + scene_mpf(p0[i])) for i in range(n))
         rhs = rates(state, pars=pars[: rates.nparams], time=t)
         S_dot = to_mp(rhs[2 * n])
         d_t = abs(S_dot - sum(y[i] * to_mp(rhs[i]) for i in range(n)) + H)
@@ -173,7 +174,3 @@ def _residuals(row, jac, n, rates, energy, pars, t, prec: Precision, p0):
         largest = max(abs(to_mp(v)) for v in row[2 * n + 1 :])
         condition = mpmath.mnorm(inverse, 1) * largest
         return [float(d_eta), float(d_e), float(d_t), float(condition), size]
-
-
-def _mpf(value) -> mpmath.mpf:
-    return mpmath.mpf(str(value))

@@ -202,7 +202,8 @@ def read_parameters(g: object, mu: object, nu: object, t: object) -> dict[str, m
 
 def _span_digits(*xs: mpmath.mpf) -> int:
     """Digits that rounding x = ωt costs in cos x, sin x when |x| is large."""
-    return int(mpmath.log10(1 + max(abs(x) for x in xs))) + 1
+    with mpmath.workprec(64):  # a count of digits: never mpmath's global precision's
+        return int(mpmath.log10(1 + max(abs(x) for x in xs))) + 1
 
 
 def _run(compute: Callable[[int], Mapping[str, mpmath.mpf]], dps: int, extra: int, what: str):

@@ -27,12 +27,15 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.precision import scene_mpf
 from ..core.scene import Scene
 
 __all__ = ["check_hamiltonian", "check_projectile"]
 
 #: Digits of the closed form in the sensitivity, and the perturbation it measures it with.
-_SENSITIVITY_DPS, _DELTA = 30, mpmath.mpf("1e-12")
+#: Digits of the sensitivity's closed forms, and the relative move of the initial state
+#: (text: read in their working precision).
+_SENSITIVITY_DPS, _DELTA = 30, "1e-12"
 _SENSITIVITY_TIMES = 16
 
 
@@ -123,16 +126,17 @@ def _sensitivity(scene: Scene, span: float, sizes: dict[str, float]) -> dict[str
     h = scene.model
     c = h.constants
     with mpmath.workdps(_SENSITIVITY_DPS + 10):
-        e0 = [mpmath.mpf(str(x)) for x in h.eta]
-        p0 = [mpmath.mpf(str(x)) for x in h.varpi]
+        delta = mpmath.mpf(_DELTA)
+        e0 = [scene_mpf(x) for x in h.eta]
+        p0 = [scene_mpf(x) for x in h.varpi]
         moves = []
         for i in range(3):
             moved = list(e0)
-            moved[i] += _DELTA * sizes["η"]
+            moved[i] += delta * sizes["η"]
             moves.append((moved, p0))
         for i in range(3):
             moved = list(p0)
-            moved[i] += _DELTA * sizes["ϖ"]
+            moved[i] += delta * sizes["ϖ"]
             moves.append((e0, moved))
         times = [
             mpmath.mpf(span) * k / _SENSITIVITY_TIMES for k in range(1, _SENSITIVITY_TIMES + 1)
@@ -146,7 +150,7 @@ def _sensitivity(scene: Scene, span: float, sizes: dict[str, float]) -> dict[str
             out.update({f"varpi{i}": x for i, x in enumerate(sol.varpi)})
             return out
 
-        measured = flow_sensitivity(evaluate, 6, times, _DELTA)
+        measured = flow_sensitivity(evaluate, 6, times, delta)
     return {
         "η": max(measured[f"eta{i}"] for i in range(3)),
         "ϖ": max(measured[f"varpi{i}"] for i in range(3)),

@@ -3,12 +3,15 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import mpmath
 
-from ..core.evaluation import Rounding, Row, upper
+from ..core.evaluation import Rounding, Row
+from ..core.exact import upper
 
 
 @dataclass(frozen=True)
@@ -31,7 +34,7 @@ class ProjectileJob:
     MONITORS = ("energy",)
 
     def evaluator(self) -> Callable[[str], Row]:
-        from ..core.balls import ball, exact_mid, exact_rational
+        from ..core.balls import exact_mid, exact_rational, gap_bound
         from .projectile_bounds import projectile_bounds
 
         rnd = self.rounding
@@ -50,16 +53,28 @@ class ProjectileJob:
                     # binary numbers) and this subtraction's rounding.
                     gap = abs(written - v)
                     errors[name] = upper(s.bounds[name] + gap * (1 + 2 * mpmath.eps))
-                if "energy" in self.monitors:
-                    g, mu, nu = (exact_mid(ball(c)) for c in (self.g, self.mu, self.nu))
-                    eta = [s.values[f"eta{i}"] for i in (1, 2, 3)]
-                    varpi = [s.values[f"varpi{i}"] for i in (1, 2, 3)]
-                    H = (
-                        sum(p * p for p in varpi) / 2
-                        + g * eta[2]
-                        + (mu * mu * (eta[0] ** 2 + eta[1] ** 2) + nu * nu * eta[2] ** 2) / 2
-                    )
-                    values["energy"] = rnd.write(H)[0]
+            if "energy" in self.monitors:
+                H = energy(self.g, self.mu, self.nu, s, self.dps)
+                values["energy"], x = rnd.write(exact_mid(H))
+                errors["energy"] = gap_bound(x, H)
             return values, errors
 
         return at
+
+
+def energy(g: object, mu: object, nu: object, s: Any, dps: int) -> Any:
+    """H of the exact motion as a ball that provably holds it, from the enclosure ``s`` of
+    (η, ϖ) and the constants ``g, mu, nu`` as the scene states them."""
+    from flint import arb, ctx
+
+    from ..core.balls import ball, to_ball
+
+    with ctx.workprec(math.ceil(dps * math.log2(10)) + 64):
+        g, mu, nu = (ball(c) for c in (g, mu, nu))
+        eta = [to_ball(s.values[f"eta{i}"], s.bounds[f"eta{i}"]) for i in (1, 2, 3)]
+        varpi = [to_ball(s.values[f"varpi{i}"], s.bounds[f"varpi{i}"]) for i in (1, 2, 3)]
+        return (
+            sum((p * p for p in varpi), arb(0)) / 2
+            + g * eta[2]
+            + (mu * mu * (eta[0] ** 2 + eta[1] ** 2) + nu * nu * eta[2] ** 2) / 2
+        )

@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..core.certificate import Certificate, exact_values, precision_of, rounding_of, worst
+from ..core.certificate import Certificate, rounding_of, worst, written
 from ..core.closed_form import ClosedForm
-from ..core.evaluation import upper
+from ..core.exact import exact_array, upper
 from ..core.precision import Precision
 from ..core.scene import Scene
 
@@ -52,20 +52,23 @@ class ProjectileClosedForm(ClosedForm):
         )
 
     def certificate(self, result: Any, digits: int) -> Certificate:
+        """The run's error against the closed form at every output time: each variable it
+        gives and the energy (against the exact motion's, in balls)."""
         import mpmath
 
-        from ..core.balls import exact_rational
+        from ..core.balls import exact_rational, gap_bound
         from .projectile_bounds import projectile_bounds
+        from .projectile_job import ProjectileJob, energy
 
         h = self.scene.model
         c = h.constants
         dps = digits + 10
         t = result.t
-        names = [n for n in result.variables if n[:-1] in ("eta", "varpi") or n == "S"]
-        cols: dict[str, list[float]] = {n: [] for n in names}
-        prec = precision_of(result)
-        times = exact_values(t, prec)
-        columns = {n: exact_values(result.variables[n], prec) for n in names}
+        names = [n for n in ProjectileJob.VARIABLES if n in result.variables]
+        monitors = [n for n in ProjectileJob.MONITORS if n in getattr(result, "monitors", {})]
+        cols: dict[str, list[float]] = {n: [] for n in names + monitors}
+        times = exact_array(t)
+        columns = {n: exact_array(result.variables[n]) for n in names}
         with mpmath.workdps(dps + 10):
             for k in range(len(t)):
                 tk = exact_rational(times[k]) - exact_rational(times[0])
@@ -75,6 +78,9 @@ class ProjectileClosedForm(ClosedForm):
                     # The proved bound and the subtraction's rounding.
                     rounding = 4 * mpmath.eps * (abs(want) + abs(got))
                     cols[n].append(upper(abs(got - want) + s.bounds[n] + rounding))
+                if monitors:
+                    H = energy(c["g"], c["mu"], c["nu"], s, dps)
+                    cols["energy"].append(gap_bound(result.monitors["energy"][k], H))
         errors = {n: np.array(v) for n, v in cols.items()}
         cert = Certificate("closed form", self.name, errors, proved=self.proved)
-        return worst(cert, result.variables, np.asarray(t, dtype=float))
+        return worst(cert, written(result), np.asarray(t, dtype=float))

@@ -16,6 +16,7 @@ track like (3/2) n t, the mean motion's response to an energy error."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from typing import Any
 
@@ -29,6 +30,7 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.exact import difference, exact
 from ..core.scene import Scene
 from ..mechanics import kepler as el
 from .scene import FORMULATIONS, with_formulation
@@ -37,7 +39,9 @@ __all__ = ["TWINS", "check_orbit", "check_twin"]
 
 #: What a scene can be checked against: another formulation, or its own at a higher precision.
 TWINS = (*FORMULATIONS, "precision")
-_SENSITIVITY_DPS, _DELTA = 40, mpmath.mpf("1e-15")
+#: Digits of the sensitivity's Kepler orbits, and the relative move of the initial state
+#: (text: read in their working precision).
+_SENSITIVITY_DPS, _DELTA = 40, "1e-15"
 _SENSITIVITY_TIMES = 16
 _STATE = ("x", "y", "z", "vx", "vy", "vz")
 
@@ -108,8 +112,10 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
     t = np.asarray(a.t, dtype=float)
     rows, series = [], {"t": t}
     for name, axes in (("position", _STATE[:3]), ("velocity", _STATE[3:])):
-        d = [_difference(a[n], b[n]) for n in axes]
-        distance = np.sqrt(sum(c * c for c in d))
+        # Each component's difference exactly, in the runs' own precision (a quad twin's
+        # differences lie far below double's ε); their length without underflow.
+        d = [difference(a[n], b[n]) for n in axes]
+        distance = np.array([math.hypot(*c) for c in zip(*d, strict=True)], dtype=float)
         size = float(np.max(np.sqrt(sum(np.asarray(a[n], dtype=float) ** 2 for n in axes))))
         rows.append(
             CheckRow(
@@ -127,13 +133,6 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
     return CheckReport(title, tuple(rows), series)
 
 
-def _difference(a: Any, b: Any) -> np.ndarray:
-    """a − b exactly (mpmath holds both operands' values), then to double."""
-    return np.array(
-        [float(mpmath.mpf(str(u)) - mpmath.mpf(str(w))) for u, w in zip(a, b, strict=True)]
-    )
-
-
 def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     """Sensitivities of the Kepler orbit through the starting state (see :func:`check_twin`)."""
     from ..core.precision import scene_mpf
@@ -142,8 +141,9 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     orbit = scene.model
     t0 = scene.time_grid[0]
     with mpmath.workdps(_SENSITIVITY_DPS):
+        delta = mpmath.mpf(_DELTA)
         mu = scene_mpf(orbit.mu)
-        x0, v0 = initial_cartesian(orbit, mpmath.mpf(str(t0)))
+        x0, v0 = initial_cartesian(orbit, exact(t0))
         start = el.cartesian_to_elements(x0, v0, mu)
         if not 0 <= start.e < 1:
             raise ValueError(
@@ -155,9 +155,9 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
         for i in range(6):
             x, v = list(x0), list(v0)
             if i < 3:
-                x[i] += _DELTA * sizes[0]
+                x[i] += delta * sizes[0]
             else:
-                v[i - 3] += _DELTA * sizes[1]
+                v[i - 3] += delta * sizes[1]
             moves.append(el.cartesian_to_elements(x, v, mu))
         times = [
             mpmath.mpf(span) * k / _SENSITIVITY_TIMES for k in range(1, _SENSITIVITY_TIMES + 1)
@@ -169,5 +169,5 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
             x, v = el.elements_to_cartesian(moved, mu)
             return {"position": list(x), "velocity": list(v)}
 
-        measured = flow_sensitivity(evaluate, 6, times, _DELTA)
+        measured = flow_sensitivity(evaluate, 6, times, delta)
     return measured

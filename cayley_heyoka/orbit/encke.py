@@ -98,7 +98,12 @@ class Unbound(ArithmeticError):
     """The osculating orbit is not an ellipse (e ≥ 1): Encke's reference orbit is undefined."""
 
     def __init__(self, e: Any) -> None:
-        super().__init__(f"the osculating orbit is not an ellipse (e = {float(e):.6g})")
+        # 1 − e as well: e = 1 − 10⁻³⁶ prints as 1 to any digits a message can show.
+        if isinstance(e, mpmath.mpf):
+            shown = f"{mpmath.nstr(e, 20)}, 1 − e = {mpmath.nstr(1 - e, 3)}"
+        else:
+            shown = f"{float(e):.17g}"
+        super().__init__(f"the osculating orbit is not an ellipse (e = {shown})")
         self.e = e
 
 

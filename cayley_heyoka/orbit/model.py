@@ -41,7 +41,7 @@ from .disturbing import (
     term_functions,
 )
 from .encke import STATE as ENCKE
-from .encke import Encke
+from .encke import Encke, Unbound
 from .family import FAMILY
 from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
@@ -74,7 +74,7 @@ def build_model(scene: Scene) -> Model:
     if not _hands_over(orbit):
         return _build(scene, None)
     t0 = _start_time(scene)
-    with mpmath.workdps(30):
+    with mpmath.workdps(scene.integrator.precision.dps + _GUARD_DIGITS):
         low = _sin_phi(orbit, scene_mpf(t0)) <= scene_mpf(orbit.equatorial_limit)
     built: dict[str, Model] = {}
     lock = threading.Lock()
@@ -119,7 +119,15 @@ def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
         # Its initial state is the deviation from the initial osculating ellipse, which the
         # formulation's own rectification computes.
         with mpmath.workdps(prec.dps + _GUARD_DIGITS):
-            b.encke(*initial_cartesian(orbit, scene_mpf(t0)))
+            try:
+                b.encke(*initial_cartesian(orbit, scene_mpf(t0)))
+            except Unbound as exc:
+                raise SceneError(
+                    _initial_field(orbit),
+                    f"{exc} at the start in {prec.name}: its eccentricity rounds to 1 in the "
+                    "run's precision (a nearly radial orbit), and formulation = 'encke' follows "
+                    "an osculating ellipse; use formulation = 'cartesian', or a higher precision",
+                ) from None
     elif orbit.formulation == "cayley":
         b.cayley(initial_state(orbit, t0, prec.dps + _GUARD_DIGITS, variant), variant)
     else:
@@ -176,15 +184,22 @@ def _provenance(model: Model, orbit: Orbit) -> None:
             pars.fields[i] = field
 
 
+def _initial_field(orbit: Orbit) -> str:
+    """The scene field holding the orbit's initial state."""
+    return "orbit.elements" if orbit.initial[0] == "elements" else "orbit.velocity"
+
+
 def validate(scene: Scene) -> None:
     """Geometric constraints that need the start time: raise :class:`SceneError` if violated."""
     orbit: Orbit = scene.model
-    with mpmath.workdps(30):
+    # In the run's precision and guard digits: an eccentricity of 1 − 10⁻³² is an ellipse to a
+    # quad run, and 1 to 30 digits.
+    with mpmath.workdps(scene.integrator.precision.dps + _GUARD_DIGITS):
         t = _start_time(scene)
         x, v = initial_cartesian(orbit, t)
         H = vectors.cross(x, v)
         h = mpmath.sqrt(vectors.dot(H, H))
-        where = "orbit.elements" if orbit.initial[0] == "elements" else "orbit.velocity"
+        where = _initial_field(orbit)
         if h == 0:
             raise SceneError(
                 where, "gives rectilinear motion (x × v = 0): the orbit plane is undefined"

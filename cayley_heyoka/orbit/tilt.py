@@ -20,10 +20,12 @@ validation/orbit_passage.py); the untilted variant keeps its own code. Outputs, 
 events are the same expressions in both, of the parameters (c, s): ``x`` … ``vz``, ρ, h, r and
 Φ stay continuous across a hand-over; Θ and Σ, which the tilted state does not carry on the
 reference plane, are NaN there (``c/c``: 1 untilted, 0/0 tilted).
-Back on the reference plane they resume within a whole turn of their values before the tilt.
+Back on the reference plane they resume within a whole turn of their values before the tilt,
+a passage through Φ = 0 counted as a turn of Θ by +π (:func:`resumed`).
 
 The hand-over itself is computed in mpmath at the run's precision plus guard digits, from the
-state's exact values, and rounded once into the run's type: it happens once per passage.
+state's round-trip text (finite: a state gone NaN stops the run before any event), and rounded
+once into the run's type: it happens once per passage.
 """
 
 from __future__ import annotations
@@ -99,11 +101,8 @@ class EquatorialHandover:
             if self.to == TILTED:
                 values = [Theta, Sigma]
             else:
-                # Back within a turn of Θ, Σ before the tilt: slow node drifts read on.
                 before = [mpmath.mpf(t) for t in prec.to_text(pars[j : j + 2])]
-                turn = 2 * mpmath.pi
-                for i in (0, 1):
-                    new[i] += turn * mpmath.nint((before[i] - new[i]) / turn)
+                new[0], new[1] = resumed(before, new)
                 values = before
             texts = [mpmath.nstr(v, prec.dps + 20, strip_zeros=False) for v in new]
             kept = [mpmath.nstr(v, prec.dps + 20, strip_zeros=False) for v in values]
@@ -114,6 +113,29 @@ class EquatorialHandover:
         pars[self._frame], pars[self._frame + 1] = prec.number(c), prec.number(s)
         pars[j], pars[j + 1] = prec.number(kept[0]), prec.number(kept[1])
         return Handover(self.to)
+
+
+def resumed(before: list[Any], new: list[Any]) -> tuple[Any, Any]:
+    """Θ, Σ back on the reference plane (``new``: Θ, Σ, Φ there, any turn) within a turn of
+    their values ``before`` the tilt (mpmath, at the working precision).
+
+    Passing through Φ = 0 turns the node by about π (only Θ − Σ is continuous; through
+    Φ = π only Θ + Σ), an approach that does not pass through it by little. Read as the
+    nearest turn, a passage would be a tie between +π and −π that the round-off of each run
+    decides (a double and a quad run would then differ by 2π). So each change is taken in
+    (−π/2, 3π/2]: a passage turns Θ by +π, an approach by its small change; Σ's change is
+    taken in the same window prograde (Θ − Σ continuous) and in the mirrored one, (−3π/2,
+    π/2], retrograde (Θ + Σ continuous).
+    """
+    pi = mpmath.pi
+    retrograde = new[2] > pi / 2
+    lows = (-pi / 2, -3 * pi / 2 if retrograde else -pi / 2)
+    out = []
+    for b, n, low in zip(before, new[:2], lows, strict=True):
+        change = n - b
+        change += 2 * pi * mpmath.floor((low + 2 * pi - change) / (2 * pi))
+        out.append(b + change)
+    return out[0], out[1]
 
 
 def reference_normal(Theta: Any, Phi: Any, c: Any, s: Any) -> list[Any]:

@@ -44,6 +44,7 @@ import heyoka as hy
 import mpmath
 
 from ..core.errors import SceneError
+from ..core.exact import exact, exact_array
 from ..core.model import ParTable, TerminalSpec
 from ..core.precision import Precision, dyadic_parts
 from . import attitude as att
@@ -201,7 +202,7 @@ class Azimuth:
         k, j = self.state_index, self.gamma_index
         with mpmath.workdps(prec.dps + 20):
             g = _mp(prec, ta.state[j : j + 3])
-            s = mpmath.mpf(prec.to_text(ta.state[k : k + 1])[0])
+            s = exact(ta.state[k])
             n = self._turns(pars)
             mc, ec = self._C
             C = mpmath.ldexp(mc, ec)
@@ -226,10 +227,9 @@ class Azimuth:
     def _turns(self, pars: Any) -> int:
         """n from the parameter nC (exact: an integer times C)."""
         mc, ec = self._C
-        value = mpmath.mpf(
-            self.precision.to_text(pars[self._turns_index : self._turns_index + 1])[0]
-        )
-        return int(mpmath.nint(value / mpmath.ldexp(mc, ec)))
+        value = exact(pars[self._turns_index])
+        with mpmath.workprec(self.precision.bits + 64):
+            return int(mpmath.nint(value / mpmath.ldexp(mc, ec)))
 
 
 def _quaternion_of(R: list[list[Expr]], precision: Precision) -> list[Expr]:
@@ -279,8 +279,8 @@ def _chart(gamma: Sequence[Any], rates: Sequence[Any]) -> int:
 
 
 def _mp(precision: Precision, values: Sequence[Any]) -> list[Any]:
-    """Numbers of the run's type as mpmath numbers, exactly (through their exact text)."""
-    return [mpmath.mpf(t) for t in precision.to_text(precision.array(list(values)))]
+    """Numbers of the run's type as mpmath numbers, exactly."""
+    return exact_array(precision.array(list(values)))
 
 
 def _dot(a: Sequence[Any], b: Sequence[Any]) -> Any:

@@ -24,14 +24,14 @@ import mpmath
 import numpy as np
 
 from ..core.model import ParTable
-from ..core.precision import Precision
+from ..core.precision import Precision, scene_mpf
 from . import attitude as att
 
 
 def kappa_limit(max_angle_degrees: Any, precision: Precision) -> str:
     """``sec²(θ_max/2)`` as decimal text accurate in the target precision."""
     with mpmath.workdps(precision.dps + 10):
-        theta = mpmath.mpf(str(max_angle_degrees)) * mpmath.pi / 180
+        theta = scene_mpf(max_angle_degrees) * mpmath.pi / 180  # a float at its exact value
         return mpmath.nstr(1 / mpmath.cos(theta / 2) ** 2, precision.dps + 5)
 
 

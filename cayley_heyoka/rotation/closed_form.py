@@ -289,7 +289,8 @@ class FreeRigidBody:
         time 10²⁰⁰⁰⁰ periods away would be computed at 20 000 digits)."""
         if not mpmath.isfinite(self.period) or self.period == 0:
             return 0
-        digits = int(mpmath.log10(1 + abs(t) / self.period)) + 1
+        with mpmath.workprec(64):  # a count of digits: never mpmath's global precision's
+            digits = int(mpmath.log10(1 + abs(t) / self.period)) + 1
         if digits > limit:
             raise ValueError(
                 f"t: {mpmath.nstr(t, 6)} is 1e{digits - 1} periods away; {what} would need "

@@ -24,7 +24,6 @@ from typing import Any
 import mpmath
 import numpy as np
 
-from ..core.certificate import exact_values
 from ..core.consistency import (
     CheckOptions,
     CheckReport,
@@ -32,6 +31,7 @@ from ..core.consistency import (
     flow_sensitivity,
     round_off_scale,
 )
+from ..core.exact import difference, exact_array
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
 from .attitude import quaternion_multiply
@@ -40,7 +40,9 @@ from .scene import with_formulation
 __all__ = ["check_closed_form", "check_rotation", "check_twin"]
 
 #: Digits of the closed form in the sensitivity, and the perturbation it measures it with.
-_SENSITIVITY_DPS, _DELTA = 30, mpmath.mpf("1e-12")
+#: Digits of the sensitivity's closed forms, and the relative move of the initial state
+#: (text: read in their working precision).
+_SENSITIVITY_DPS, _DELTA = 30, "1e-12"
 #: Times at which the sensitivity is measured, evenly over the span (it grows with t).
 _SENSITIVITY_TIMES = 16
 
@@ -338,19 +340,8 @@ def _check_poisson_twin(scene: Scene, why: str) -> CheckReport:
     }
     a, b = run(own), run(Scene.from_dict(twin))
     attitude = [n for n in (*_QUATERNION, *LAMBDA) if n in a.variables]
-    errors, flipped = {}, {}
-    with mpmath.workdps(prec.dps + 5):
-        for name in ("p", "q", "r", *GAMMA, *attitude):
-            pairs = list(
-                zip(
-                    exact_values(np.ravel(a[name]), prec),
-                    exact_values(np.ravel(b[name]), prec),
-                    strict=True,
-                )
-            )
-            errors[name] = np.array([float(abs(x - y)) for x, y in pairs])
-            if name in _QUATERNION:
-                flipped[name] = np.array([float(abs(x + y)) for x, y in pairs])
+    errors = {n: difference(a[n], b[n]) for n in ("p", "q", "r", *GAMMA, *attitude)}
+    flipped = {n: difference(a[n], -np.asarray(b[n])) for n in attitude if n in _QUATERNION}
     if flipped:
         # The sign of each row's quaternion is the formulation's choice: q and −q are one
         # attitude, so each row is compared with the nearer of the twin's two.
@@ -450,12 +441,13 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
     with mpmath.workdps(dps + 10):
         rates = [scene_mpf(x) for x in body.rates]
         size = mpmath.sqrt(sum(x * x for x in rates))
-        q0 = [mpmath.mpf(str(c)) for c in body.initial_quaternion(Precision("real", 4 * dps))]
-        half = _DELTA / 2
+        q0 = exact_array(body.initial_quaternion(Precision("real", 4 * dps)))
+        delta = mpmath.mpf(_DELTA)
+        half = delta / 2
         starts = []
         for axis in range(3):
             moved = list(rates)
-            moved[axis] += _DELTA * size
+            moved[axis] += delta * size
             starts.append((moved, q0))
         for axis in range(3):
             turn = [mpmath.cos(half), 0, 0, 0]
@@ -480,7 +472,7 @@ def _sensitivity(scene: Scene, span: float) -> dict[str, float]:
             out.update(dict(zip("wxyz", state.quaternion, strict=True)))
             return out
 
-        measured = flow_sensitivity(evaluate, 6, times, _DELTA)
+        measured = flow_sensitivity(evaluate, 6, times, delta)
     return {
         "rates": max(measured[n] for n in "pqr"),
         "quaternion": max(measured[n] for n in "wxyz"),

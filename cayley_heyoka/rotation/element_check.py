@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core.consistency import CheckReport, CheckRow
 from ..core.errors import OptionError, SceneError
+from ..core.exact import exact
 from ..core.model import ParTable
 from ..core.precision import Precision, number_argument
 from ..core.scene import Scene
@@ -134,7 +135,7 @@ def _choose_upsilon0(inertia, rates, quat, t, prec: Precision) -> str:
     candidates = []
     for fraction in ("0.5", "0.4", "0.6", "0.3", "0.7"):
         with mpmath.workdps(prec.dps + 5):
-            low, high = mpmath.mpf(str(lo)), mpmath.mpf(str(hi))
+            low, high = exact(lo), exact(hi)
             text = mpmath.nstr(low + (high - low) * mpmath.mpf(fraction), 17)
         try:
             E = cayley_elements(inertia, rates, None, t, text, quaternion=quat, precision=prec)
@@ -269,7 +270,7 @@ def check_element_equations(
     )
     gl_x, gl_w = _gauss_legendre(nodes, prec.dps)
     with mpmath.workdps(prec.dps + 10):
-        a0, b0 = mpmath.mpf(str(t_start)), mpmath.mpf(str(t_stop))
+        a0, b0 = exact(t_start), exact(t_stop)
         ends = [a0 + (b0 - a0) * i / count for i in range(count + 1)]
         times = []
         for i in range(count):

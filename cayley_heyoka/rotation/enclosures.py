@@ -308,7 +308,8 @@ def _at_a_half_turn(values: dict[str, mpmath.mpf], bounds: dict[str, mpmath.mpf]
     w = values["qw"]
     for name, c in (("lambda", "qx"), ("mu", "qy"), ("nu", "qz")):
         if not mpmath.isfinite(values[name]) or not mpmath.isfinite(bounds[name]):
-            with mpmath.workprec(max(mpmath.mp.prec, 256)):
+            # The quotient to the midpoints' own bits (they are exact binary numbers).
+            with mpmath.workprec(max(256, values[c]._mpf_[3] + w._mpf_[3])):
                 values[name] = values[c] / w if w != 0 else mpmath.inf
             bounds[name] = mpmath.inf
 

@@ -9,9 +9,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import mpmath
+from flint import arb
 
-from ..core.balls import exact_rational
-from ..core.evaluation import Rounding, Row, upper
+from ..core.balls import ball, exact_mid, exact_rational, gap_bound, to_ball
+from ..core.evaluation import Rounding, Row
+from ..core.exact import upper
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,7 @@ class FreeBodyJob:
     monitors: tuple[str, ...]
     rounding: Rounding
 
-    VARIABLES = ("p", "q", "r", "lambda", "mu", "nu", "qw", "qx", "qy", "qz")
+    VARIABLES = ("p", "q", "r", "lambda", "mu", "nu", "qw", "qx", "qy", "qz", "psi")
     MONITORS = ("energy", "momentum_squared", "momentum_space", "orthogonality")
 
     def body(self) -> Any:
@@ -60,11 +62,10 @@ class FreeBodyJob:
             with mpmath.workdps(self.dps + 30):
                 # The time since the start, exactly (both are numbers of the file's precision).
                 s = body.enclose(exact_rational(rnd.read(text)) - exact_rational(t0))
-                exact = {n: s.values[n] for n in ("p", "q", "r", "qw", "qx", "qy", "qz")}
-                exact.update({n: s.values[n] for n in ("lambda", "mu", "nu")})
-                values, errors = {}, {}
+                values: dict[str, Any] = {}
+                errors: dict[str, Any] = {}
                 for name in self.variables:
-                    v = exact[name]
+                    v = s.values[name]
                     text_v, written = rnd.write(v)
                     values[name] = text_v
                     if not mpmath.isfinite(v):  # λ, μ, ν at a half-turn
@@ -74,29 +75,52 @@ class FreeBodyJob:
                     # digits: both are short binary numbers) and this subtraction's rounding.
                     gap = abs(written - v)
                     errors[name] = upper(s.bounds[name] + gap * (1 + 2 * mpmath.eps))
-                inertia = [mpmath.mpf(m) for m in self.inertia]
-                for name in self.monitors:
-                    values[name] = self._monitor(name, s, inertia)
+            exact = monitor_balls(self.monitors, s, self.inertia, self.dps)
+            for name, value in exact.items():
+                if isinstance(value, list):
+                    texts = [rnd.write(exact_mid(c)) for c in value]
+                    values[name] = [w for w, _ in texts]
+                    errors[name] = [gap_bound(x, c) for (_, x), c in zip(texts, value, strict=True)]
+                else:
+                    values[name], x = rnd.write(exact_mid(value))
+                    errors[name] = gap_bound(x, value)
             return values, errors
 
         return at
 
-    def _monitor(self, name: str, s: Any, inertia: Sequence[mpmath.mpf]) -> Any:
-        """The monitor of the exact motion at this time, rounded once."""
-        rates = [s.values[n] for n in "pqr"]
-        L = [m * w for m, w in zip(inertia, rates, strict=True)]
-        if name == "energy":
-            value: Any = sum(m * w * w for m, w in zip(inertia, rates, strict=True)) / 2
-        elif name == "momentum_squared":
-            value = sum(x * x for x in L)
-        elif name == "momentum_space":
-            from .quadratures import quaternion_rotate
 
-            q = [s.values[n] for n in ("qw", "qx", "qy", "qz")]
-            return [self.rounding.write(g)[0] for g in quaternion_rotate(q, L)]
-        else:  # orthogonality: the closed form's attitude is a rotation by construction
-            value = mpmath.mpf(0)
-        return self.rounding.write(value)[0]
+def monitor_balls(
+    names: Sequence[str], s: Any, moments: Sequence[object], dps: int
+) -> dict[str, arb | list[arb]]:
+    """The monitors ``names`` of the exact motion, each as a ball (a list for a vector) that
+    provably holds it: from the rates and quaternion of the enclosure ``s``, balls of their
+    proved bounds, and the moments as the scene states them. A rotation's orthogonality
+    defect is 0. In Arb at ``dps`` digits and 64 bits more (not python-flint's global
+    precision)."""
+    from flint import ctx
+
+    from .attitude import quaternion_to_matrix
+
+    out: dict[str, arb | list[arb]] = {}
+    with ctx.workprec(math.ceil(dps * math.log2(10)) + 64):
+        inertia = [ball(m, "body.inertia") for m in moments]
+        w = [to_ball(s.values[n], s.bounds[n]) for n in "pqr"]
+        L = [m * x for m, x in zip(inertia, w, strict=True)]
+        for name in names:
+            if name == "energy":
+                out[name] = sum((m * x * x for m, x in zip(inertia, w, strict=True)), arb(0)) / 2
+            elif name == "momentum_squared":
+                out[name] = sum((x * x for x in L), arb(0))
+            elif name == "momentum_space":
+                q = [to_ball(s.values[n], s.bounds[n]) for n in ("qw", "qx", "qy", "qz")]
+                # R(q) of the unit quaternion the balls hold: L in space axes.
+                R = quaternion_to_matrix(q)
+                out[name] = [sum((R[i][j] * L[j] for j in range(3)), arb(0)) for i in range(3)]
+            elif name == "orthogonality":
+                out[name] = arb(0)
+            else:
+                raise ValueError(f"the free body's closed form gives no monitor {name!r}")
+    return out
 
 
 #: A scene's attitude kinds and the :class:`.closed_form.FreeRigidBody` arguments taking them.

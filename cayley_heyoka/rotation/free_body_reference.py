@@ -8,15 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from ..core.certificate import (
-    Certificate,
-    exact_values,
-    precision_of,
-    rounding_of,
-    worst,
-)
+from ..core.certificate import Certificate, rounding_of, worst, written
 from ..core.closed_form import ClosedForm
-from ..core.evaluation import upper
+from ..core.exact import exact_array, upper
 from ..core.precision import Precision
 from ..core.scene import Scene
 
@@ -90,57 +84,62 @@ class FreeBodyClosedForm(ClosedForm):
         return {"invariable_plane": log}, {"invariable_plane": np.array(errors)}
 
     def certificate(self, result: Any, digits: int) -> Certificate:
+        """The run's error against the closed form at every output time: each variable it
+        gives, each monitor (against the monitor of the exact motion, in balls) and each
+        invariable-plane crossing."""
         import mpmath
 
-        from ..core.balls import exact_rational
-        from .free_body_job import free_body
+        from ..core.balls import exact_rational, gap_bound
+        from .free_body_job import FreeBodyJob, free_body, monitor_balls
 
         body = self.scene.model
         dps = digits + 10
         # The attitude as the scene states it: the proved bounds start from it exactly.
         exact = free_body(body.inertia, body.rates, body.attitude, dps)
         t = result.t
-        names = [n for n in ("p", "q", "r", "qw", "qx", "qy", "qz") if n in result.variables]
-        has_rodrigues = "lambda" in result.variables
-        cols: dict[str, list[float]] = {
-            n: [] for n in names + (["lambda", "mu", "nu"] if has_rodrigues else [])
-        }
-        prec = precision_of(result)
-        times = exact_values(t, prec)
-        columns = {n: exact_values(result.variables[n], prec) for n in cols}
+        names = [n for n in FreeBodyJob.VARIABLES if n in result.variables]
+        monitors = [n for n in FreeBodyJob.MONITORS if n in getattr(result, "monitors", {})]
+        cols: dict[str, list[Any]] = {n: [] for n in names + monitors}
+        times = exact_array(t)
+        columns = {n: exact_array(result.variables[n]) for n in names}
         with mpmath.workdps(dps + 10):
             t0 = times[0]
             for k in range(len(t)):
                 s = exact.enclose(exact_rational(times[k]) - exact_rational(t0))
-                got = {n: columns[n][k] for n in cols}
-                exact_q = [s.values[n] for n in ("qw", "qx", "qy", "qz")]
+                got = {n: columns[n][k] for n in names}
+                want = {n: s.values[n] for n in FreeBodyJob.VARIABLES}
                 if "qw" in got:
                     # q and −q are one attitude: compare with the sign the run took.
-                    ours = [got["qw"], got["qx"], got["qy"], got["qz"]]
-                    if sum(a * b for a, b in zip(ours, exact_q, strict=True)) < 0:
-                        exact_q = [-c for c in exact_q]
-                want = {n: s.values[n] for n in ("p", "q", "r", "lambda", "mu", "nu")}
-                want.update(zip(("qw", "qx", "qy", "qz"), exact_q, strict=True))
-                for n in cols:
+                    ours = [got[n] for n in ("qw", "qx", "qy", "qz")]
+                    theirs = [want[n] for n in ("qw", "qx", "qy", "qz")]
+                    if sum(a * b for a, b in zip(ours, theirs, strict=True)) < 0:
+                        want.update((n, -want[n]) for n in ("qw", "qx", "qy", "qz"))
+                for n in names:
                     # The proved bound (λ, μ, ν: of the closed form's own quotient, so the
                     # sign taken for q does not matter), and the subtraction's rounding.
                     rounding = 4 * mpmath.eps * (abs(want[n]) + abs(got[n]))
                     cols[n].append(upper(abs(got[n] - want[n]) + s.bounds[n] + rounding))
+                for n, value in monitor_balls(monitors, s, body.inertia, dps).items():
+                    run = np.ravel(result.monitors[n][k])
+                    if isinstance(value, list):
+                        cols[n].append([gap_bound(x, c) for x, c in zip(run, value, strict=True)])
+                    else:
+                        cols[n].append(gap_bound(run[0], value))
             event_errors = {}
             log = result.events.get("invariable_plane")
             if log is not None:
-                event_errors["invariable_plane"] = self._crossings(exact, log, times[-1], t0, prec)
-        errors = {n: np.array(v) for n, v in cols.items()}
+                event_errors["invariable_plane"] = self._crossings(exact, log, times[-1], t0)
+        errors = {n: np.array(v, dtype=float) for n, v in cols.items()}
         cert = Certificate("closed form", self.name, errors, event_errors, self.proved)
-        return worst(cert, result.variables, np.asarray(t, dtype=float))
+        return worst(cert, written(result), np.asarray(t, dtype=float))
 
     @staticmethod
-    def _crossings(exact: Any, log: Any, t1: Any, t0: Any, prec: Precision) -> np.ndarray:
+    def _crossings(exact: Any, log: Any, t1: Any, t0: Any) -> np.ndarray:
         """Each recorded crossing's error, in the log's order."""
         span = t1 - t0
         errors = np.zeros(len(log))
         for axis in ("x1", "y1", "z1"):
-            ours = [x - t0 for x in exact_values(log.where(axis), prec)]
+            ours = [x - t0 for x in exact_array(log.where(axis))]
             theirs = exact.crossing_times(axis, 0, span, proved=True)
             if len(ours) != len(theirs):
                 raise RuntimeError(

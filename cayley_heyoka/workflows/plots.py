@@ -65,8 +65,9 @@ def _family_plots(result: Result) -> dict[str, Plot]:
 
 def supported_kinds(result: Result) -> tuple[str, ...]:
     """The kinds of plot that ``result`` holds the data for: the drift, then its family's."""
-    own = [kind for kind, plot in _family_plots(result).items() if plot.available(result)]
-    return ("drift",) * bool(result.conserved) + tuple(own)
+    n = len(result.t)
+    own = [k for k, plot in _family_plots(result).items() if n >= 1 and plot.available(result)]
+    return ("drift",) * bool(result.conserved and n >= 2) + tuple(own)
 
 
 def _refuse(result: Result, kind: str, why: str) -> PlotError:
@@ -77,10 +78,24 @@ def _supported(result: Result) -> str:
     return f"; kinds this result supports: {', '.join(supported_kinds(result)) or 'none'}"
 
 
+def _require_rows(result: Result, kind: str) -> None:
+    """Refuse a result with too few output rows for ``kind``: every plot needs one, the
+    drift two (its first value is 0 by definition). A run that stopped early says why."""
+    least = 2 if kind == "drift" else 1
+    n = len(result.t)
+    if n >= least:
+        return
+    rows = {0: "no output rows", 1: "one output row"}[n]
+    ended = f" (the run ended: {result.message})" if result.message else ""
+    needs = "two output times" if least == 2 else "an output time"
+    raise PlotError(f"kind {kind!r} needs at least {needs}; this result has {rows}{ended}")
+
+
 def _plot_of(result: Result, kind: str) -> Plot:
     """The family plot ``kind`` for ``result``, or a PlotError saying whose plot it is."""
     plot = _family_plots(result).get(kind)
     if plot is not None:
+        _require_rows(result, kind)
         return plot
     from ..core.families import FAMILIES
 
@@ -135,6 +150,7 @@ def drift_of(result: Result) -> dict[str, np.ndarray]:
             f"needs conserved monitors, and this result lists none (its monitors: {monitors}; "
             "none is conserved by this scene's flow)",
         )
+    _require_rows(result, "drift")
     out = {}
     for name in result.conserved:
         d = np.abs(as_float(result.drift(name), f"the drift of {name}"))
@@ -182,6 +198,8 @@ def drift(
             raise PlotError("series: give it with an array of times t, not with a Result")
         title = title or scene_title(t.scene)
         t, series = t.t, drift_of(t)
+    elif len(t) < 2:
+        raise PlotError(f"t: a drift needs at least two output times, got {len(t)}")
     if not series:
         raise PlotError("series: empty; give at least one drift series")
     t = as_float(t)

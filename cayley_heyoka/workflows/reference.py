@@ -61,6 +61,7 @@ from ..core.certificate import (
     label,
     next_precision,
     precision_for,
+    uncovered,
 )
 from ..core.closed_form import ClosedForm, with_precision
 from ..core.errors import OptionError, SceneError
@@ -95,6 +96,9 @@ class ReferenceOutcome:
     certificate: Certificate
     precision: Precision
     attempts: list[dict[str, Any]]
+    #: The variables and monitors written without an error bound (the file is then not
+    #: certified, whatever the digits of the others).
+    uncovered: tuple[str, ...] = ()
 
 
 def generate_reference(
@@ -248,6 +252,10 @@ def generate_reference(
                 "give (it gives the state, the attitude and the conserved monitors); use "
                 "'integrate'"
             )
+    if closed is not None and evaluated is None and closed.job(first) is None:
+        # The closed form lacks some output the file writes (a user monitor, an output it
+        # does not give): it cannot certify the file, a second precision can.
+        closed = None
     # Held to the end: a second command on the same --out is refused, not mixed in.
     with _claim_workdir(workdir):
         if evaluated is not None:
@@ -354,8 +362,12 @@ def generate_reference(
             started,
             stretches=stretches,
         )
-        _write(out, written, cert, digits, certified, metadata, None if keep_work else workdir)
-        return ReferenceOutcome(out, certified, cert, written.precision, attempts)
+        missing = _write(
+            out, written, cert, digits, certified, metadata, None if keep_work else workdir
+        )
+        return ReferenceOutcome(
+            out, certified and not missing, cert, written.precision, attempts, missing
+        )
 
 
 def _closed_form_reference(
@@ -410,8 +422,8 @@ def _closed_form_reference(
     metadata = _metadata(
         scene, command, "closed form", digits, certified, prec, attempts, max_bits, started
     )
-    _write(out, result, cert, digits, certified, metadata, remove)
-    return ReferenceOutcome(out, certified, cert, prec, attempts)
+    missing = _write(out, result, cert, digits, certified, metadata, remove)
+    return ReferenceOutcome(out, certified and not missing, cert, prec, attempts, missing)
 
 
 # ---------------------------------------------------------------------- certificates
@@ -472,12 +484,17 @@ def _where(cert: Certificate) -> str:
     error is of its time, at no output time)."""
     name, at = cert.worst
     where = f"{name} at t = {at:.6g}" if math.isfinite(at) else name
-    if not math.isfinite(cert.scaled) and name in ("lambda", "mu", "nu"):
-        where += (
+    if math.isfinite(cert.scaled):
+        return where
+    if name in ("lambda", "mu", "nu"):
+        return where + (
             ": unbounded, as λ, μ, ν are where the body is a half-turn from the space frame "
             "(w = 0); choose output times away from it"
         )
-    return where
+    return where + (
+        ": unbounded, the value is undefined (NaN) or infinite in one of the results compared "
+        "and not in the other"
+    )
 
 
 def _write(
@@ -488,18 +505,28 @@ def _write(
     certified: bool,
     meta: dict,
     remove: Path | None = None,
-) -> None:
-    """Write the reference file, then remove the work directory ``remove`` (if given): both,
-    even under a signal, which takes effect after them."""
+) -> tuple[str, ...]:
+    """Write the reference file (``result`` and ``cert``), then remove the work directory
+    ``remove`` (if given): both, even under a signal, which takes effect after them.
+
+    A variable or monitor the certificate gives no error for makes the file uncertified and
+    unproved, and is named in the certificate's ``uncovered``
+    (:func:`cayley_heyoka.core.certificate.uncovered`). Returns those names.
+    """
     from ..core.signals import held_signals
 
+    missing = uncovered(cert, result)
+    if missing:
+        certified = False
+        meta = {**meta, "certified": False}
     result.metadata = {**result.metadata, "reference": meta}
 
     def fill(f: Any) -> None:
         result.fill(f)
         g = f.create_group("certificate")
         g.attrs["method"] = cert.method
-        g.attrs["proved"] = cert.proved
+        g.attrs["proved"] = cert.proved and not missing
+        g.attrs["uncovered"] = json.dumps(list(missing))
         g.attrs["compared_with"] = cert.compared_with
         g.attrs["digits_requested"] = digits
         g.attrs["digits_certified"] = cert.digits()
@@ -509,7 +536,8 @@ def _write(
         g.attrs["scaling"] = "absolute where |value| <= 1, relative above"
         for name, err in cert.errors.items():
             ds = g.create_dataset(name, data=err)
-            ds.attrs["long_name"] = f"scaled error bound of {name}"
+            kind = "proved bound of the absolute error" if cert.proved else "absolute error"
+            ds.attrs["long_name"] = f"{kind} of {name}"
             if ds.ndim and ds.shape[0] == len(result.t):  # over the output times
                 ds.dims[0].attach_scale(f["time"])
         ge = g.create_group("events")
@@ -520,6 +548,7 @@ def _write(
         write_hdf5(out, fill)
         if remove is not None:
             _remove_workdir(remove)
+    return missing
 
 
 def _claim_workdir(workdir: Path) -> Any:

@@ -27,6 +27,7 @@ from typing import Any
 import mpmath
 import numpy as np
 
+from ..core.exact import difference, exact, exact_array, is_nan
 from ..core.precision import Precision
 from ..core.result import Result
 
@@ -66,7 +67,10 @@ def assert_trajectory_close(
     ``cayley-heyoka reference``; zero when absent) — a proved bound for a closed-form reference
     (the free body, the projectile: ``certificate.proved``), an estimate otherwise. Differences
     are computed in the higher of the two precisions, from the exact values, so a quad run
-    compared with a quad reference resolves differences far below double's ε.
+    compared with a quad reference resolves differences far below double's ε. A value that
+    is NaN in both (undefined there by design: an orbit's Θ and Σ on the tilted frame,
+    docs/orbits.md) agrees; one that is NaN in one of them only fails
+    (:mod:`cayley_heyoka.core.exact`).
 
     Parameters
     ----------
@@ -126,6 +130,7 @@ class _Comparison:
     allowed: np.ndarray  # as float64
     ratio: np.ndarray  # |Δ| / allowed (inf where allowed = 0 < |Δ|, or non-finite)
     failing: np.ndarray  # bool
+    undefined: np.ndarray  # "result" or "reference" where NaN on that side only, else ""
 
 
 def _compare(
@@ -137,28 +142,36 @@ def _compare(
     rtol: float,
     atol: float,
 ) -> _Comparison:
+    """``a`` against ``b`` point by point. Where both are NaN (undefined in both results:
+    :mod:`cayley_heyoka.core.exact`) they agree; a NaN on one side only fails."""
     extra = np.zeros(b.shape) if bound is None else bound
+    nan_a = np.vectorize(is_nan, otypes=[bool])(a) if a.size else np.zeros(a.shape, bool)
+    nan_b = np.vectorize(is_nan, otypes=[bool])(b) if b.size else np.zeros(b.shape, bool)
+    undefined = np.where(nan_a & ~nan_b, "result", np.where(nan_b & ~nan_a, "reference", ""))
     if pa.kind == "double" and pb.kind == "double":
         with np.errstate(invalid="ignore"):
-            diff = np.abs(a - b)
-            allowed = atol + rtol * np.abs(b) + extra
-            failing = ~(diff <= allowed)  # NaN fails
+            diff = np.where(nan_a & nan_b, 0.0, np.abs(a - b))
+            allowed = atol + rtol * np.where(nan_b, 0.0, np.abs(b)) + extra
+            failing = ~(diff <= allowed) & ~(nan_a & nan_b)  # NaN on one side fails
         ratio = np.divide(diff, allowed, out=np.where(diff > 0, np.inf, 0.0), where=allowed > 0)
         ratio[~np.isfinite(diff)] = np.inf
-        return _Comparison(diff, allowed, ratio, failing)
+        return _Comparison(diff, allowed, ratio, failing, undefined)
     # Exact inputs, and enough bits that |Δ| keeps its leading digits however small it is.
     work = max(pa.bits, pb.bits) + 32
-    flat_a, flat_b = np.ravel(a), np.ravel(b)
+    flat_a, flat_b = exact_array(a), exact_array(b)
     flat_x = np.ravel(extra)
+    gaps = np.ravel(difference(a, b))
     n = len(flat_a)
-    diff, allowed, ratio = np.empty(n), np.empty(n), np.empty(n)
+    diff, allowed, ratio = gaps, np.empty(n), np.empty(n)
     failing = np.zeros(n, dtype=bool)
     with mpmath.workprec(work):
-        mp_rtol, mp_atol = mpmath.mpf(rtol), mpmath.mpf(atol)
+        mp_rtol, mp_atol = exact(rtol), exact(atol)
         for i in range(n):
-            x, y = _exact(flat_a[i], pa), _exact(flat_b[i], pb)
-            d = abs(x - y)
-            allow = mp_atol + mp_rtol * abs(y) + mpmath.mpf(float(flat_x[i]))
+            x, y = flat_a[i], flat_b[i]
+            both = mpmath.isnan(x) and mpmath.isnan(y)
+            d = mpmath.mpf(0) if both else abs(mpmath.fsub(x, y, exact=True))
+            size = mpmath.mpf(0) if mpmath.isnan(y) else abs(y)
+            allow = mp_atol + mp_rtol * size + exact(float(flat_x[i]))
             failing[i] = not (mpmath.isfinite(d) and d <= allow)  # NaN fails
             if not mpmath.isfinite(d):
                 ratio[i] = math.inf
@@ -166,22 +179,15 @@ def _compare(
                 ratio[i] = float(d / allow)
             else:
                 ratio[i] = math.inf if d > 0 else 0.0
-            diff[i], allowed[i] = float(d), float(allow)
+            allowed[i] = float(allow)
     shape = a.shape
     return _Comparison(
-        diff.reshape(shape), allowed.reshape(shape), ratio.reshape(shape), failing.reshape(shape)
+        diff.reshape(shape),
+        allowed.reshape(shape),
+        ratio.reshape(shape),
+        failing.reshape(shape),
+        undefined,
     )
-
-
-def _exact(value: Any, precision: Precision) -> mpmath.mpf:
-    """``value`` as an mpmath number, exactly (the caller's working precision must hold it)."""
-    if precision.kind == "double":
-        return mpmath.mpf(float(value))
-    # The decimal text of a real128/real round-trips (it is how result files store them), so
-    # rounding it correctly to the value's own bits gives the value back exactly.
-    with mpmath.workprec(precision.bits):
-        exact = mpmath.mpf(str(value))
-    return exact
 
 
 def _describe_failure(name: str, cmp: _Comparison, t: np.ndarray) -> str:
@@ -191,10 +197,13 @@ def _describe_failure(name: str, cmp: _Comparison, t: np.ndarray) -> str:
     where = _point(worst, t)
     ratio = cmp.ratio[worst]
     times = failing.reshape(len(failing), -1).any(axis=1)
+    side = cmp.undefined[worst]
+    gap = f"|Δ| = {cmp.diff[worst]:.3e}, allowed {cmp.allowed[worst]:.3e} ({ratio:.3g}×)"
+    if side:
+        gap = f"undefined (NaN) in the {side} only"
     return (
         f"  {name}: {int(times.sum())} of {len(times)} output times fail; worst at {where}: "
-        f"|Δ| = {cmp.diff[worst]:.3e}, allowed {cmp.allowed[worst]:.3e} ({ratio:.3g}×); "
-        f"first failure at {_point(tuple(first), t)}"
+        f"{gap}; first failure at {_point(tuple(first), t)}"
     )
 
 
@@ -220,10 +229,9 @@ def _check_times(res: Result, ref: Result) -> None:
     coarse = min(res.precision, ref.precision, key=lambda p: p.bits)
     work = max(res.precision.bits, ref.precision.bits) + 32
     with mpmath.workprec(work):
-        xa = [_exact(v, res.precision) for v in ta]
-        xb = [_exact(v, ref.precision) for v in tb]
+        xa, xb = exact_array(ta), exact_array(tb)
         scale = max(max(abs(v) for v in xa), max(abs(v) for v in xb))
-        tol = _TIME_ULPS * mpmath.mpf(coarse.epsilon) * scale
+        tol = _TIME_ULPS * exact(coarse.epsilon) * scale
         for i, (x, y) in enumerate(zip(xa, xb, strict=True)):
             if abs(x - y) > tol:
                 raise AssertionError(
@@ -484,8 +492,9 @@ def assert_drift_within(
     ------
     AssertionError
         A window exceeds its allowance (the message gives the monitor, window, measured and
-        golden drift, their ratio and the allowance), or the two cannot be compared (other
-        precision, other conserved monitors, a window without output times).
+        golden drift, their ratio and the allowance; a window NaN in both agrees, NaN in one
+        only exceeds), or the two cannot be compared (other precision, other conserved
+        monitors, a window without output times).
     """
     __tracebackhide__ = True
     factor = _nonneg_number(factor, "factor")
@@ -525,7 +534,8 @@ def assert_drift_within(
     for name, gold in golden.peaks.items():
         got = measured.peaks[name]
         allowed = factor * gold + floor
-        failing = np.flatnonzero(~(got <= allowed))  # NaN fails
+        # A window undefined (NaN) in both agrees; NaN in one only fails.
+        failing = np.flatnonzero(~(got <= allowed) & ~(np.isnan(got) & np.isnan(gold)))
         if not len(failing):
             continue
         excess = np.where(np.isfinite(got[failing]), got[failing] / allowed[failing], np.inf)

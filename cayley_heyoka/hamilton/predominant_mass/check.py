@@ -23,6 +23,7 @@ import mpmath
 import numpy as np
 
 from ...core.consistency import CheckReport, CheckRow
+from ...core.exact import difference
 from ...core.precision import scene_mpf
 from ...core.scene import Scene
 from . import system as planets
@@ -77,8 +78,8 @@ def check_formulations(scene: Scene) -> CheckReport:
     ):
         worst = np.zeros(len(t))
         for i in range(1, n + 1):
-            d = [_difference(a, b, f"{prefix}{axis}{i}") for axis in "xyz"]
-            worst = np.maximum(worst, np.sqrt(sum(c * c for c in d)))
+            d = [difference(a[f"{prefix}{axis}{i}"], b[f"{prefix}{axis}{i}"]) for axis in "xyz"]
+            worst = np.maximum(worst, [math.hypot(*c) for c in zip(*d, strict=True)])
         series["position" if not prefix else "velocity"] = worst
         rows.append(CheckRow(label, float(np.max(worst)), bound, "10 ε √N t max(n a) law"))
     for name, res in runs.items():
@@ -88,12 +89,6 @@ def check_formulations(scene: Scene) -> CheckReport:
             rows.append(CheckRow(f"{monitor} drift ({name})", drift, bound, "10 ε √N"))
     title = "Predominant mass: Hamilton's elements (S2.) against the canonical equations of (F2.)"
     return CheckReport(title, tuple(rows), series)
-
-
-def _difference(a: Any, b: Any, name: str) -> np.ndarray:
-    """a − b in the runs' precision, then to double (a difference far below double's ε of the
-    values survives this)."""
-    return np.array([float(u - w) for u, w in zip(a[name], b[name], strict=True)])
 
 
 def _orbit_scales(scene: Scene) -> dict[str, float]:
