@@ -82,6 +82,8 @@ class Compiled(Spares):
     spare: list[Any] = field(default_factory=list)
     #: Indices of the parameters the right-hand sides use (see :class:`Watch`).
     rhs_pars: list[int] = field(default_factory=list)
+    #: The recorded events' expressions, compiled (:func:`event_values`; None: not needed).
+    event_values: EventValues | None = None
 
 
 #: Integrators kept for reuse per compiled structure (one per thread that runs it at once).
@@ -94,6 +96,7 @@ _CACHE: dict[str, Compiled] = {}
 def clear_cache() -> None:
     """Forget every compiled integrator (for measuring compile time)."""
     _CACHE.clear()
+    _EVENT_VALUES.clear()
 
 
 def cache_size() -> int:
@@ -144,8 +147,10 @@ def _compile(model: Model, options: IntegratorOptions) -> Compiled:
     compact = use_compact_mode(model, options)
     kw = prec.heyoka_kwargs
     ev_kw = {"fp_type": kw["fp_type"]} if kw else {}
+    # Every crossing, whatever the event's direction: the parity of a run's crossings
+    # (:mod:`.event_parity`) counts them all; the logs keep the event's own direction.
     nt_events = [
-        hy.nt_event(e.expression, _Recorder(), direction=_direction(e.direction), **ev_kw)
+        hy.nt_event(e.expression, _Recorder(), direction=hy.event_direction.any, **ev_kw)
         for e in model.events
     ]
     t_events = [
@@ -173,7 +178,71 @@ def _compile(model: Model, options: IntegratorOptions) -> Compiled:
         [e for _, e in outputs], [v for v, _ in model.system], compact_mode=compact, **kw
     )
     rhs_pars = sorted(int(str(p)[1:]) for p in hy.get_params([rhs for _, rhs in model.system]))
-    return Compiled(ta, evaluator, time.perf_counter() - t0, rhs_pars=rhs_pars)
+    values = event_values(model, options)
+    return Compiled(ta, evaluator, time.perf_counter() - t0, rhs_pars=rhs_pars, event_values=values)
+
+
+class EventValues:
+    """A model's recorded events at one state: the sign of each event's expression and of its
+    rate of change along the motion (compiled once per structure), what
+    :class:`.event_parity.EventParity` compares.
+
+    Parameters
+    ----------
+    function
+        ``heyoka.cfunc`` of the expressions, then of their time derivatives, over the state
+        variables.
+    """
+
+    def __init__(self, function: Any) -> None:
+        self._function = function
+        self._held = function.nparams
+
+    def at(self, state: Any, pars: Any, t: Any) -> tuple[list[int], list[int]]:
+        """The signs (0: zero or NaN) of each expression and of its time derivative at
+        ``state`` (one state, the run's precision), the whole parameter vector ``pars`` and
+        the time ``t``."""
+        kwargs: dict[str, Any] = {"time": t}
+        if self._held:
+            kwargs["pars"] = pars[: self._held]
+        values = [1 if v > 0 else -1 if v < 0 else 0 for v in self._function(state, **kwargs)]
+        n = len(values) // 2
+        return values[:n], values[n:]
+
+
+_EVENT_VALUES: dict[str, EventValues] = {}
+
+
+def event_values(model: Model, options: IntegratorOptions) -> EventValues | None:
+    """The compiled signs of ``model``'s recorded events and of their rates (shared by the
+    single run and the batch lanes of one structure), or None for a model without both
+    recorded and terminal events: only a terminal event can hide a crossing
+    (:mod:`.event_parity`), and no other model pays the compilation."""
+    if not (model.events and model.terminal):
+        return None
+    key = cache_key(model, options)
+    hit = _EVENT_VALUES.get(key)
+    if hit is not None:
+        return hit
+    expressions = [e.expression for e in model.events]
+    function = hy.cfunc(
+        expressions + [along_motion(model, e) for e in expressions],
+        [v for v, _ in model.system],
+        compact_mode=use_compact_mode(model, options),
+        **options.precision.heyoka_kwargs,
+    )
+    values = _EVENT_VALUES[key] = EventValues(function)
+    return values
+
+
+def along_motion(model: Model, expression: Any) -> Any:
+    """The time derivative of ``expression`` along the motion of ``model``'s system: its
+    gradient along the right-hand sides, and its explicit dependence on the time."""
+    # heyoka differentiates by variables only: one stands in for the time meanwhile.
+    tau = hy.make_vars("time__")
+    held = hy.subs(expression, {hy.time: tau})
+    terms = [hy.diff(held, tau)] + [hy.diff(held, v) * rhs for v, rhs in model.system]
+    return hy.subs(hy.sum(terms), {tau: hy.time})
 
 
 def cache_key(model: Model, options: IntegratorOptions) -> str:

@@ -33,6 +33,7 @@ import numpy as np
 from .causes import check_sources, explain_start, start_failure
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
+from .event_parity import EventParity
 from .families import FAMILIES
 from .model import Handover, Model, call_handler, own_terminal
 from .precision import Precision, approx, exact_fraction
@@ -186,6 +187,7 @@ class Propagation:
         self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)
         ta.pars[:] = self._pars[: self._held]
+        self._start_parity()
         self._signals = DeferredSignals(self._stop_stepping)
         self._callback = _ProgressCallback(progress, self._signals) if progress else None
         # Whether a signal stops heyoka by poisoning the parameters (see Watch), set per call
@@ -363,6 +365,7 @@ class Propagation:
             code = int(outcome)
             if self._handover is not None:
                 ta = self._take_over(self._handover.variant)
+                self._settle(ta, ta.time)  # in the variant's terms (its events' expressions)
                 continue
             if outcome == hy.taylor_outcome.time_limit:
                 continue
@@ -401,6 +404,7 @@ class Propagation:
         for ev in ta.t_events if self.model.terminal else ():
             ev.callback.target = self._on_terminal
         self._ta_pars = ta.pars  # a view of the integrator's parameters (building one: ~1 µs)
+        self._recorders = [ev.callback for ev in ta.nt_events] if self.model.events else []
         return ta
 
     def _release_integrator(self) -> None:
@@ -454,6 +458,15 @@ class Propagation:
             ta.nt_events if target.events else [], recorded, strict=True
         ):
             ev.callback.times, ev.callback.directions = times, directions
+        values = compiled.event_values
+        if values is None:
+            self._parity = None
+        elif self._parity is None:
+            # Nothing of the stretch before to account for: the variant's signs from here.
+            self._parity = EventParity(values)
+            self._parity.start(ta.state, self._pars, ta.time, self._crossings())
+        else:
+            self._parity.values = values
         return ta
 
     def _restart(self) -> Any:
@@ -470,6 +483,7 @@ class Propagation:
         self._logged = []
         self._ta = ta = self._fresh_integrator()
         ta.pars[:] = self._pars[: self._held]
+        self._start_parity()
         return ta
 
     def _estimate(self, steps: int, reached: Any, budget: int, cut: bool) -> None:
@@ -548,10 +562,28 @@ class Propagation:
             if spec.records is not None:
                 self._logged.append((spec.records, t, spec.direction))
             return False
+        self._settle(ta, t)
         if self._signals.received:
             # A signal noted while the parameters were copied back: its poison was overwritten.
             self._stop_stepping()
         return True
+
+    def _start_parity(self) -> None:
+        """The accounting of every crossing of the recorded events beside terminal events
+        (:mod:`.event_parity`; None for a model without both), from the start."""
+        values = self.compiled.event_values
+        self._parity = EventParity(values) if values is not None else None
+        if self._parity is not None:
+            self._parity.start(self._initial, self._pars, self.grid[0], self._crossings())
+
+    def _crossings(self) -> list[tuple[list, list]]:
+        return [(rec.times, rec.directions) for rec in self._recorders]
+
+    def _settle(self, ta: Any, t: Any) -> None:
+        """After a terminal handler at ``t``: account for every crossing of the recorded
+        events beside it (:class:`EventParity`)."""
+        if self._parity is not None:
+            self._parity.settle(ta.state, self._pars, t, self._crossings())
 
     def _pass_rows(self, dtime: tuple[Any, Any]) -> None:
         """The output rows up to ``dtime`` (a terminal event's double-length time) were
@@ -589,6 +621,11 @@ class Propagation:
                 [spec.name, list(prec.to_text(prec.array([t])))[0], d]
                 for spec, t, d in self._logged
             ],
+            "parity": (
+                self._parity.checkpoint(lambda t: str(prec.to_text(prec.array([t]))[0]))
+                if self._parity is not None
+                else None
+            ),
         }
 
     def restore(self, snapshot: dict[str, Any]) -> None:
@@ -622,6 +659,15 @@ class Propagation:
             (specs[name], prec.from_text(np.array([t]))[0], int(d))
             for name, t, d in snapshot.get("logged", [])
         ]
+        if self._parity is not None:
+            parity = snapshot.get("parity")
+            if parity is None:
+                # A snapshot that kept no baseline: the signs of the restored state.
+                self._parity.start(ta.state, self._pars, ta.time, self._crossings())
+            elif len(parity["signs"]) != len(recorded):
+                raise ValueError("the snapshot is of a scene with other events")
+            else:
+                self._parity.resume(parity, lambda t: prec.from_text(np.array([t]))[0])
 
     def result(self, states: np.ndarray | None = None, pars: np.ndarray | None = None) -> Result:
         """The result of what has been recorded (``states``/``pars``: every row, if not kept)."""
@@ -633,6 +679,8 @@ class Propagation:
         elif pars is None:
             raise ValueError("result(states, pars): the rows' parameters go with their states")
         times = self.grid[: len(states)]
+        if self._parity is not None:
+            self._parity.finish(self._crossings())
         values = evaluate_outputs(self.compiled, model, states, pars, times, prec)
         if self.status == 0 and (bad := first_nonfinite(model, values, times)) is not None:
             # A finite state can still give an infinite output (V = "1/(t - 1)" at t = 1): the

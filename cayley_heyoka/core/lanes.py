@@ -42,6 +42,7 @@ import heyoka as hy
 import numpy as np
 
 from . import compiler, engine, recording
+from .event_parity import EventParity
 from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
 from .result import EventLog
@@ -146,6 +147,8 @@ class CompiledBatch(compiler.Spares):
     width: int
     compile_seconds: float
     spare: list[Any] = field(default_factory=list)
+    #: The recorded events' signs (:func:`.compiler.event_values`; None: not needed).
+    event_values: compiler.EventValues | None = None
 
 
 _CACHE: dict[str, CompiledBatch] = {}
@@ -170,8 +173,9 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
         t0 = time.perf_counter()
         compact = compiler.use_compact_mode(model, options)
         held = model.integrator_parameters()
+        # Every crossing, as in the single run's integrator (:mod:`.event_parity`).
         nt = [
-            hy.nt_event_batch(e.expression, _LaneRecorder(), direction=compiler.event_direction(e))
+            hy.nt_event_batch(e.expression, _LaneRecorder(), direction=hy.event_direction.any)
             for e in model.events
         ]
         te = [
@@ -195,7 +199,8 @@ def compile_batch(model: Model, options: IntegratorOptions) -> tuple[CompiledBat
             t_events=te,
             **extra,
         )
-        compiled = CompiledBatch(ta, width, time.perf_counter() - t0)
+        values = compiler.event_values(model, options)
+        compiled = CompiledBatch(ta, width, time.perf_counter() - t0, event_values=values)
         _CACHE[key] = compiled
         return compiled, False
 
@@ -267,7 +272,7 @@ def propagate_members(
         if isinstance(cancel, Cancel):
             cancel.watch(poison)
         try:
-            lanes = _Lanes(ta, compiled.width, model, options, grid, next_block, results, cancel)
+            lanes = _Lanes(ta, compiled, model, options, grid, next_block, results, cancel)
             lanes.run(initial, pars, handlers)
         finally:
             if isinstance(cancel, Cancel):
@@ -414,12 +419,19 @@ class _Member:
     time: float = 0.0
     nonfinite: bool = False
     handover: bool = False
+    #: The accounting of its recorded events' crossings (:mod:`.event_parity`); None for a
+    #: twin (:meth:`_Lanes._twin`) and for a model without terminal and recorded events.
+    parity: EventParity | None = None
+
+    def crossings(self) -> list[tuple[list, list]]:
+        return list(zip(self.event_times, self.event_directions, strict=True))
 
 
 class _Lanes:
-    def __init__(self, ta, width, model, options, grid, next_block, results, cancel) -> None:
+    def __init__(self, ta, compiled, model, options, grid, next_block, results, cancel) -> None:
         self.cancel = cancel
-        self.ta, self.width, self.model, self.grid = ta, width, model, grid
+        self.ta, self.width, self.model, self.grid = ta, compiled.width, model, grid
+        self.event_values = compiled.event_values
         self.next_block, self.results = next_block, results
         self.budget = options.max_steps
         self.limit = {} if options.max_step is None else {"max_delta_t": float(options.max_step)}
@@ -427,8 +439,8 @@ class _Lanes:
         self.recorders = [ev.callback for ev in ta.nt_events] if model.events else []
         self.table: np.ndarray | None = None
         # Each lane's member, and the copy an idle lane follows (:meth:`_twin`).
-        self.lanes: list[_Member | None] = [None] * width
-        self.twins: list[_Member | None] = [None] * width
+        self.lanes: list[_Member | None] = [None] * self.width
+        self.twins: list[_Member | None] = [None] * self.width
         for ev in ta.t_events if model.terminal else ():
             ev.callback.target = self._on_terminal
 
@@ -454,6 +466,9 @@ class _Lanes:
         m.counters = {"steps": 0, **{spec.counter: 0 for spec in specs}}
         m.event_times = [[] for _ in self.model.events]
         m.event_directions = [[] for _ in self.model.events]
+        if self.event_values is not None:
+            m.parity = EventParity(self.event_values)
+            m.parity.start(self.initial[index], m.pars, self.grid[0], m.crossings())
         return m
 
     @staticmethod
@@ -513,11 +528,19 @@ class _Lanes:
             for j, m in enumerate(members):
                 m.counters["steps"] = int(res[j][3])
                 self._keep(m, out[:, :, j].copy())
-        recorders = self.recorders
-        self.results.block(
-            block, out, res, lambda j: [rec.take(j) for rec in recorders], self.pars, end, members
-        )
+                self._gather(j, m)
+                if m.parity is not None:
+                    m.parity.finish(m.crossings())
+        self.results.block(block, out, res, self._recorded(members), self.pars, end, members)
         return True
+
+    def _recorded(self, members: list[_Member] | None) -> Callable[[int], list]:
+        """Lane ``j``'s crossings of each event at the end of a batch call: its member's
+        (gathered from the recorders), or the recorders' (no terminal events)."""
+        if members is not None:
+            return lambda j: members[j].crossings()
+        recorders = self.recorders
+        return lambda j: [rec.take(j) for rec in recorders]
 
     def _lane_by_lane(self, members: Iterator[int]) -> None:
         """Integrate ``members`` lane by lane on the engine's schedule of calls (see the module
@@ -639,12 +662,7 @@ class _Lanes:
         m.time = t
         if reached:
             self._keep(m, out[rows[:reached]].copy())
-        for rec, times, directions in zip(
-            self.recorders, m.event_times, m.event_directions, strict=True
-        ):
-            got_t, got_d = rec.take(j)
-            times += got_t
-            directions += got_d
+        self._gather(j, m)
         code = int(outcome)
         if m.status != 0 or (t == points[-1] and m.done == len(self.grid)):
             pass  # stopped by its handler (status set), or every output reached
@@ -662,6 +680,15 @@ class _Lanes:
             m.status = -1
             m.message = f"stopped at t = {t} with outcome {outcome}"
         self._record_trivial(j)
+
+    def _gather(self, j: int, m: _Member) -> None:
+        """Move the crossings lane ``j``'s recorders hold into its member ``m``'s."""
+        for rec, times, directions in zip(
+            self.recorders, m.event_times, m.event_directions, strict=True
+        ):
+            got_t, got_d = rec.take(j)
+            times += got_t
+            directions += got_d
 
     def _keep(self, m: _Member, rows: np.ndarray) -> None:
         m.states.append(rows)
@@ -698,6 +725,10 @@ class _Lanes:
             if spec.records is not None:
                 m.stopped_at = (spec.records, t, spec.direction)
             return False
+        if m.parity is not None:
+            self._gather(lane, m)
+            state = np.ascontiguousarray(ta.state[:, lane])
+            m.parity.settle(state, m.pars, t, m.crossings())
         if self._cancelled():
             ta.pars[:, lane] = np.nan  # a Cancel's poison was overwritten just above
         return True
@@ -719,7 +750,9 @@ class _Lanes:
         pars = m.pars
         if m.terminal:
             pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
-        recorded = list(zip(m.event_times, m.event_directions, strict=True))
+        if m.parity is not None:
+            m.parity.finish(m.crossings())
+        recorded = m.crossings()
         logged = [m.stopped_at] if m.stopped_at is not None else []
         events = recording.logs_of(self.model, recorded, _DOUBLE, logged)
         return LaneResult(

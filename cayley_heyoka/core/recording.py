@@ -195,12 +195,18 @@ def logs_of(
     model: Model, recorded: list[tuple[list, list]], prec: Precision, logged: Sequence[tuple] = ()
 ) -> dict[str, EventLog]:
     """The event logs of ``model`` from each event's recorded (times, directions), and the
-    occurrences ``(spec, time, direction)`` logged by terminal events (a stop, a hand-over)."""
+    occurrences ``(spec, time, direction)`` logged by terminal events (a stop, a hand-over).
+
+    Every crossing is recorded, whatever the event's direction (:mod:`.event_parity` counts
+    them all): an event's log keeps those of its own direction."""
     gathered: dict[str, list[tuple[Any, int, str]]] = {}
     for spec, (times, directions) in zip(model.events, recorded, strict=True):
         gathered.setdefault(spec.name, [])
+        want = spec.direction
         gathered[spec.name] += [
-            (t, d, spec.label_for(d)) for t, d in zip(times, directions, strict=True)
+            (t, d, spec.label_for(d))
+            for t, d in zip(times, directions, strict=True)
+            if not want or d == want
         ]
     for spec, t, d in logged:
         gathered.setdefault(spec.name, []).append((t, d, spec.label_for(d)))
