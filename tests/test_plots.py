@@ -275,7 +275,7 @@ def test_command_refuses_missing_and_foreign_files(tmp_path, capsys):
     with h5py.File(foreign, "w") as f:
         f.attrs["format"] = "someone.else"
     assert main(["plot", str(foreign), "--kind", "drift"]) == 2
-    assert "format attribute is 'someone.else'" in capsys.readouterr().err
+    assert "an HDF5 file of format 'someone.else'" in capsys.readouterr().err
 
 
 def test_missing_matplotlib_names_the_extra(free, tmp_path, monkeypatch, capsys):

@@ -361,19 +361,16 @@ def plot_file(path: str | Path, kind: str, out: str | Path | None = None) -> Pat
 
 
 def _file_format(path: Path) -> str:
-    import h5py
+    """The ``format`` of a result or sweep file; anything else is refused as the file reader
+    refuses it (missing, a name too long, not HDF5, damaged, another kind of our files)."""
+    from ..core.files import FORMATS, identify, open_ours
 
-    if not path.is_file():
-        raise PlotError("no such file" if not path.exists() else "is not a regular file")
-    try:
-        with h5py.File(path, "r") as f:
-            fmt = f.attrs.get("format")
-    except OSError as exc:
-        raise PlotError(f"not an HDF5 file ({exc})") from exc
-    known = ("cayley_heyoka.result", "cayley_heyoka.sweep")
-    if fmt not in known:
-        raise PlotError(f"format attribute is {fmt!r}; expected one of {', '.join(known)}")
-    return str(fmt)
+    kind = identify(path)
+    if kind in ("result", "sweep"):
+        return FORMATS[kind]
+    with open_ours(path, "result"):  # raises ResultFileError, saying what the file is
+        pass
+    raise PlotError(f"is a {kind} file, not a result or sweep file")
 
 
 def _read_sweep(path: Path) -> tuple[np.ndarray, dict[str, np.ndarray], str]:

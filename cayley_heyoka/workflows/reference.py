@@ -56,6 +56,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.certificate import (
+    BITS_PER_DIGIT,
     Certificate,
     difference_certificate,
     label,
@@ -67,13 +68,14 @@ from ..core.closed_form import ClosedForm, with_precision
 from ..core.errors import OptionError, SceneError
 from ..core.families import FAMILIES
 from ..core.files import OutputError, check_destination, write_hdf5
-from ..core.precision import Precision, number_argument
+from ..core.precision import MAX_BITS, Precision, number_argument, shown
 from ..core.scene import Scene, require_scene
 
 #: Digits of working precision beyond those requested: room for the error a long run builds.
 GUARD_DIGITS = 4
-#: Largest precision the escalation goes to, unless told otherwise.
-MAX_BITS = 1024
+#: Most digits a reference may ask for: those the largest precision (:data:`MAX_BITS`) holds,
+#: its guard digits kept.
+MAX_DIGITS = int((MAX_BITS - 1) / BITS_PER_DIGIT) - GUARD_DIGITS
 #: Stretches between checkpoints (each ends a step; the count is part of what the file records).
 STRETCHES = 64
 #: How the reference is made: "closed-form" evaluates the closed form; "integrate" integrates
@@ -192,8 +194,11 @@ def generate_reference(
         configuration), or an integration stopped.
     """
     scene = require_scene(scene)
-    if isinstance(digits, bool) or not isinstance(digits, int) or digits < 1:
-        raise ValueError(f"digits must be an integer >= 1, got {digits!r}")
+    if isinstance(digits, bool) or not isinstance(digits, int) or not 1 <= digits <= MAX_DIGITS:
+        raise ValueError(
+            f"digits must be an integer in 1 … {MAX_DIGITS} (what {MAX_BITS} bits hold beside "
+            f"{GUARD_DIGITS} guard digits), got {shown(digits)}"
+        )
     if (
         isinstance(max_bits, bool)
         or not isinstance(max_bits, int)

@@ -35,7 +35,15 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import SceneError
-from ..core.precision import Number, Precision, exact_fraction, fraction_text, scene_mpf, shown
+from ..core.precision import (
+    Number,
+    Precision,
+    exact_decimal,
+    exact_fraction,
+    fraction_text,
+    scene_mpf,
+    shown,
+)
 from ..core.scene import Scene, check_keys, checked_numbers, number, plain_copy, read_toml
 
 KINDS = ("grid", "random")
@@ -441,22 +449,8 @@ def _grid_values(spec: Mapping[str, Any], where: str, prec: Precision) -> tuple[
 def _decimal(value: Fraction, prec: Precision) -> str:
     """Exact decimal text when the fraction has one (denominator 2^a 5^b), else rounded text
     with the digits the precision needs."""
-    d = value.denominator
-    twos = fives = 0
-    while d % 2 == 0:
-        d //= 2
-        twos += 1
-    while d % 5 == 0:
-        d //= 5
-        fives += 1
-    if d != 1:
-        return fraction_text(value, prec)
-    k = max(twos, fives)
-    digits = abs(value.numerator) * 10**k // value.denominator
-    sign = "-" if value < 0 else ""
-    text = str(digits).rjust(k + 1, "0")
-    whole, frac = (text[:-k], text[-k:].rstrip("0")) if k else (text, "")
-    return f"{sign}{whole}.{frac}" if frac else f"{sign}{whole}"
+    exact = exact_decimal(value)
+    return exact if exact is not None else fraction_text(value, prec)
 
 
 def _parse_path(name: str, where: str) -> tuple[str | int, ...]:

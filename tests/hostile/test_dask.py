@@ -105,7 +105,7 @@ def test_a_scheduler_that_does_not_answer_is_refused_and_the_file_kept(
     _untouched(good, before)
 
 
-@pytest.mark.covers("class:9", "key:run.scheduler")
+@pytest.mark.covers("class:9", "study-key:run.scheduler")
 def test_a_silent_scheduler_in_the_study_is_refused_naming_its_field(
     hostile, tmp_path, good, short, silent
 ):
@@ -149,7 +149,7 @@ def test_a_malformed_scheduler_option_is_refused_before_any_work(hostile, tmp_pa
     assert "must be an address like 'tcp://host:8786'" in o.error_line
 
 
-@pytest.mark.covers("class:9", "key:run.scheduler")
+@pytest.mark.covers("class:9", "study-key:run.scheduler")
 @pytest.mark.parametrize("address", BAD_ADDRESSES[:2])
 def test_a_malformed_scheduler_in_the_study_is_refused_before_any_work(hostile, tmp_path, address):
     study = _study(tmp_path, f'[run]\nscheduler = "{address}"\n')

@@ -367,7 +367,7 @@ def test_check_number_option_is_named_by_the_option(hostile, value):
     hostile.run(argv, expect="refused", field="--set upsilon0:")
 
 
-@pytest.mark.covers("class:11", "verb:sweep", "key:sweep.parameters")
+@pytest.mark.covers("class:11", "verb:sweep", "study-key:sweep.parameters")
 @pytest.mark.parametrize(
     ("spec", "field"),
     [
