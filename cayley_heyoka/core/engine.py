@@ -30,7 +30,7 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from .causes import check_sources, explain_start, start_failure
+from .causes import check_sources, explain_start, start_failure, zero_step, zero_step_message
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .event_parity import EventParity
@@ -189,7 +189,10 @@ class Propagation:
         ta.pars[:] = self._pars[: self._held]
         self._start_parity()
         self._signals = DeferredSignals(self._stop_stepping)
-        self._callback = _ProgressCallback(progress, self._signals) if progress else None
+        self._zero = ZeroSteps()
+        self._callback = (
+            _ProgressCallback(progress, self._signals, self._zero) if progress else None
+        )
         # Whether a signal stops heyoka by poisoning the parameters (see Watch), set per call
         # of advance().
         self._poisoning = False
@@ -261,6 +264,7 @@ class Propagation:
                         WORKER.run(
                             lambda: self._propagate(until, end, budget, states, pars_rows),
                             self._stop_stepping,
+                            self._stop_harder,
                         )
         finally:
             if self._poisoning and self._ta is not None:
@@ -287,6 +291,25 @@ class Propagation:
         ta = self._ta
         if self._poisoning and ta is not None:
             ta.pars[self.compiled.rhs_pars] = np.nan
+
+    def _stop_harder(self) -> bool:
+        """Called by :class:`Watch` while heyoka steps: whether the run must be stopped by
+        poisoning its state as well as its parameters, which it then does.
+
+        Steps of size zero (:func:`.causes.zero_step`) see neither the parameters nor change
+        the state, and heyoka goes on taking them to its step limit: stopped so when a signal
+        has not stopped the run within a wait, or when the waits found heyoka's last step of
+        size zero and its time unchanged for a second (:class:`ZeroSteps`). Poisoned again
+        at each call, since each such step writes back the state it read.
+        """
+        ta = self._ta
+        if not (self._poisoning and ta is not None):
+            return False
+        if not (self._signals.received or self._zero.watch(ta, self.grid[0])):
+            return False
+        ta.pars[self.compiled.rhs_pars] = np.nan
+        ta.state[:] = np.nan
+        return True
 
     def _propagate(
         self,
@@ -336,7 +359,7 @@ class Propagation:
             # poisoning the parameters (Watch), or else by a callback after each step.
             callback: Callable[[Any], bool] | None = self._callback
             if callback is None and self._signals.active and not self._poisoning:
-                callback = self._signals.callback
+                callback = _SignalCallback(self._signals, self._zero)
             probe = self._probes[0] if self._probes else None
             limit = left if probe is None else min(left, probe)
             if probe is not None and isinstance(callback, _ProgressCallback):
@@ -347,7 +370,13 @@ class Propagation:
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
             outcome, out = res[0], res[-1]
             taken = self.counters["steps"] + res[3]
-            cut = probe is not None and outcome == hy.taylor_outcome.step_limit and limit < left
+            stuck = not self._signals.received and (zero_step(outcome, res[1]) or self._zero.seen)
+            cut = (
+                probe is not None
+                and outcome == hy.taylor_outcome.step_limit
+                and limit < left
+                and not stuck
+            )
             if probe is not None:
                 self._estimate(taken, ta.dtime, budget, cut)
             if cut:
@@ -369,6 +398,10 @@ class Propagation:
                 continue
             if outcome == hy.taylor_outcome.time_limit:
                 continue
+            if stuck:
+                when = self._zero.at if self._zero.seen else ta.time
+                self.status, self.message = -1, zero_step_message(self.model, when)
+                break
             if outcome == hy.taylor_outcome.step_limit:
                 self._out_of_steps(budget)
                 break
@@ -761,14 +794,64 @@ def _not_after(row: Any, hi: Any, lo: Any) -> bool:
     return bool(row < hi or (row == hi and not lo < 0))
 
 
+class ZeroSteps:
+    """Whether heyoka is taking steps of size zero (:func:`.causes.zero_step`), which it
+    goes on taking to its step limit, seen by a per-step callback (:meth:`step`: this many
+    in a row) or, between steps, by the thread that waits for the run (:meth:`watch`: the
+    last step of size zero and the time unchanged at :attr:`LOOKS` looks in a row)."""
+
+    #: Steps of size zero in a row that a per-step callback takes for a stall.
+    IN_A_ROW = 100
+    #: Looks in a row (0.25 s apart) that find a step of size zero and the same time.
+    LOOKS = 4
+
+    def __init__(self) -> None:
+        self.seen = False
+        #: The time at which the run was found stalled.
+        self.at: Any = None
+        self._count = 0
+        self._looks = 0
+        self._time: Any = None
+
+    def step(self, ta: Any) -> bool:
+        """After a step: whether the run is stalled (then :attr:`seen`)."""
+        self._count = self._count + 1 if ta.last_h == 0 else 0
+        if self._count >= self.IN_A_ROW and not self.seen:
+            self.seen, self.at = True, ta.time
+        return self.seen
+
+    def watch(self, ta: Any, start: Any) -> bool:
+        """At a look from another thread: whether the run is stalled (then :attr:`seen`).
+        ``start``: the run's start time, where a fresh integrator's last step is zero."""
+        t = ta.time
+        still = ta.last_h == 0 and t == self._time and t != start
+        self._looks = self._looks + 1 if still else 0
+        if self._looks >= self.LOOKS and not self.seen:
+            self.seen, self.at = True, t
+        self._time = t
+        return self.seen
+
+
 class _ProgressCallback:
-    def __init__(self, progress: Progress, signals: DeferredSignals) -> None:
+    def __init__(self, progress: Progress, signals: DeferredSignals, zero: ZeroSteps) -> None:
         self.progress = progress
         self.signals = signals
+        self.zero = zero
 
     def __call__(self, ta: Any) -> bool:
         self.progress(ta.time)
-        return not self.signals.received
+        return not (self.signals.received or self.zero.step(ta))
+
+
+class _SignalCallback:
+    """Stops heyoka after the step in which a signal was noted, or in a stall."""
+
+    def __init__(self, signals: DeferredSignals, zero: ZeroSteps) -> None:
+        self.signals = signals
+        self.zero = zero
+
+    def __call__(self, ta: Any) -> bool:
+        return not (self.signals.received or self.zero.step(ta))
 
 
 class _HeldProgress:
@@ -783,7 +866,7 @@ class _HeldProgress:
 
     def __call__(self, ta: Any) -> bool:
         self.times.append(ta.time)
-        return not self.callback.signals.received
+        return not (self.callback.signals.received or self.callback.zero.step(ta))
 
     def release(self) -> None:
         for t in self.times:

@@ -41,7 +41,7 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import compiler, engine, recording
+from . import causes, compiler, engine, recording, signals
 from .event_parity import EventParity
 from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
@@ -349,21 +349,36 @@ class Cancel(threading.Event):
 
     def set(self) -> None:
         super().set()
+        if self._poke():
+            # Steps of size zero (:func:`.causes.zero_step`) write back the state they read
+            # and do not see the parameters: poisoned again until every call has returned.
+            threading.Thread(target=self._keep_poking, daemon=True).start()
+
+    def _poke(self) -> bool:
+        """Call the hooks of the calls in flight; whether there were any."""
         with self._lock:
             hooks = list(self._hooks)
         for hook in hooks:
             hook()
+        return bool(hooks)
+
+    def _keep_poking(self) -> None:
+        while True:
+            time.sleep(signals.REPOISON)
+            if not self._poke():
+                return
 
 
 class _Poison:
-    """Makes a batch integrator's parameters NaN (a :class:`Cancel` hook; a system without
-    parameters steps on to the end of its call)."""
+    """Makes a batch integrator's parameters and state NaN (a :class:`Cancel` hook): its
+    next step is not finite, and heyoka returns."""
 
     def __init__(self, ta: Any) -> None:
         self.ta = ta
 
     def __call__(self) -> None:
         self.ta.pars[:] = np.nan
+        self.ta.state[:] = np.nan
 
 
 class _Shared:
@@ -666,6 +681,8 @@ class _Lanes:
         code = int(outcome)
         if m.status != 0 or (t == points[-1] and m.done == len(self.grid)):
             pass  # stopped by its handler (status set), or every output reached
+        elif causes.zero_step(outcome, res[1]):
+            m.status, m.message = -1, causes.zero_step_message(self.model, t)
         elif m.steps >= self.budget:
             self._out_of_steps(m, t)
         elif outcome == hy.taylor_outcome.err_nf_state:

@@ -221,9 +221,10 @@ class Watch:
     """Propagations of the main thread run here, in one long-lived thread, while the main
     thread waits in Python, where its signal handlers run at once.
 
-    A noted signal then sets the parameters that the right-hand sides use to NaN: the step
-    under way becomes non-finite, and heyoka returns the outputs of the whole steps before it
-    (``err_nf_state``; the rows it returns are the uninterrupted run's). The engine restores
+    A noted signal then sets the parameters that the right-hand sides use to NaN (and, if the
+    run goes on regardless, the state: see :meth:`run`): the step under way becomes
+    non-finite, and heyoka returns the outputs of the whole steps before it (``err_nf_state``;
+    the rows it returns are the uninterrupted run's). The engine restores
     the parameters and reports the interruption. No callback runs after each step, so an
     uninterrupted run costs what a run in any other thread does (measured:
     ``python validation/interrupt_cost.py``). Double precision with runtime parameters only;
@@ -235,12 +236,20 @@ class Watch:
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
 
-    def run(self, job: Callable[[], None], stop: Callable[[], None]) -> None:
+    def run(
+        self,
+        job: Callable[[], None],
+        stop: Callable[[], None],
+        again: Callable[[], bool] | None = None,
+    ) -> None:
         """Run ``job`` in the watch's thread and wait for it; re-raise what it raised.
 
         ``stop`` is called if the wait itself is interrupted (an exception raised by another
         signal handler): the job is stopped and waited for before the exception goes on, so
-        that nothing steps the integrator behind the caller's back.
+        that nothing steps the integrator behind the caller's back. ``again`` is called while
+        the job runs (every 0.25 s, and every :data:`REPOISON` s once it has returned true:
+        a signal noted that has not stopped the job yet), to stop it harder: steps of size
+        zero (:func:`.causes.zero_step`) do not see the poisoned parameters.
         """
         with self._lock:
             if self._thread is None or not self._thread.is_alive():
@@ -252,8 +261,10 @@ class Watch:
         box: dict[str, BaseException] = {}
         self._jobs.put((job, done, box))
         try:
-            while not done.wait(0.25):
-                pass
+            wait = 0.25
+            while not done.wait(wait):
+                if again is not None and again():
+                    wait = REPOISON
         except BaseException:
             stop()
             done.wait()
@@ -271,6 +282,9 @@ class Watch:
             finally:
                 done.set()
 
+
+#: Seconds between the poisonings of a propagation that a signal has not yet stopped.
+REPOISON = 0.01
 
 WORKER = Watch()
 

@@ -313,7 +313,7 @@ def _ensemble_group(
     """Members sharing compiled code and without terminal events: heyoka's ensemble."""
     import heyoka as hy
 
-    from ..core import compiler, recording
+    from ..core import causes, compiler, recording
 
     _, scene0, model0 = group[0]
     compiled, cached = compiler.compile_model(model0, scene0.integrator)
@@ -360,7 +360,10 @@ def _ensemble_group(
                 hy.taylor_outcome.err_nf_state: "the state became non-finite",
                 hy.taylor_outcome.step_limit: "the step budget integrator.max_steps was spent",
             }.get(outcome, f"stopped with outcome {outcome}")
-            part.message[row] = f"{why} after {kept} (the last output time kept)"
+            if causes.zero_step(outcome, run[2]):
+                part.message[row] = causes.zero_step_message(model, ta.time)
+            else:
+                part.message[row] = f"{why} after {kept} (the last output time kept)"
         part.steps[row] = nsteps
         logs = recording.event_logs(model, ta, prec)
         for name in layout.events:
