@@ -131,7 +131,7 @@ def test_uncertified_reference_is_written_and_marked(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--digits", "0"], "digits must be an integer >= 1, got 0"),
+        (["--digits", "0"], "--digits must be an integer in 1 … 303"),
         (["--digits", "20", "--tolerance", "0"], "tolerance must be a number > 0"),
         (["--digits", "20", "--precision", "huge"], "--precision must be double, quad or"),
         (["--digits", "60", "--max-bits", "128"], "--max-bits (128) is below the precision needed"),

@@ -544,7 +544,7 @@ def test_a_cancel_stops_the_batch_calls_in_flight(scene):
     flight stay unfinished, instead of stepping on to t = 1e7 (hours: a hang)."""
     import threading
 
-    from cayley_heyoka.core import lanes
+    from cayley_heyoka.core import lanes, signals
     from cayley_heyoka.core.engine import model_of
 
     data = {**scene, "output": {"times": {"start": "0", "stop": "1e7", "count": 3}}}
@@ -553,7 +553,7 @@ def test_a_cancel_stops_the_batch_calls_in_flight(scene):
     grid = member.output.time_grid(member.integrator.precision)
     initial = np.repeat(np.array(model.initial_state, dtype=float)[None, :], 12, axis=0)
     pars = np.repeat(np.array(model.pars.values, dtype=float)[None, :], 12, axis=0)
-    cancel = lanes.Cancel()
+    cancel = signals.Cancel()
     out: list = []
     worker = threading.Thread(
         target=lambda: out.append(

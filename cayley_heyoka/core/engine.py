@@ -41,9 +41,9 @@ from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite
 from .result import Result, versions
 from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals, held_signals
+from .step_callbacks import HeldProgress, Progress, ProgressCallback, SignalCallback, ZeroSteps
 
-#: Called with the time reached, in the run's precision (a float, a heyoka real128 or real).
-Progress = Callable[[Any], None]
+__all__ = ["Progress", "Propagation", "model_of", "preflight", "run"]
 
 
 def run(scene: Scene, progress: Progress | None = None, *, raise_on_failure: bool = True) -> Result:
@@ -190,9 +190,7 @@ class Propagation:
         self._start_parity()
         self._signals = DeferredSignals(self._stop_stepping)
         self._zero = ZeroSteps()
-        self._callback = (
-            _ProgressCallback(progress, self._signals, self._zero) if progress else None
-        )
+        self._callback = ProgressCallback(progress, self._signals, self._zero) if progress else None
         # Whether a signal stops heyoka by poisoning the parameters (see Watch), set per call
         # of advance().
         self._poisoning = False
@@ -359,12 +357,12 @@ class Propagation:
             # poisoning the parameters (Watch), or else by a callback after each step.
             callback: Callable[[Any], bool] | None = self._callback
             if callback is None and self._signals.active and not self._poisoning:
-                callback = _SignalCallback(self._signals, self._zero)
+                callback = SignalCallback(self._signals, self._zero)
             probe = self._probes[0] if self._probes else None
             limit = left if probe is None else min(left, probe)
-            if probe is not None and isinstance(callback, _ProgressCallback):
+            if probe is not None and isinstance(callback, ProgressCallback):
                 # Progress is reported once a step is kept: a cut probe is taken again.
-                callback = _HeldProgress(callback)
+                callback = HeldProgress(callback)
             self._rows, self._rows_pars = grid[i : i + outputs], []
             self._next_row = grid[i] if outputs else None
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
@@ -383,7 +381,7 @@ class Propagation:
                 # Resuming this call would change bits (see below): start again, uncut.
                 ta = self._restart()
                 continue
-            if isinstance(callback, _HeldProgress):
+            if isinstance(callback, HeldProgress):
                 callback.release()
             out = out[int(resume) : int(resume) + outputs]
             self.counters["steps"] += res[3]
@@ -792,83 +790,3 @@ def pass_rows(
 def _not_after(row: Any, hi: Any, lo: Any) -> bool:
     """Whether the output time ``row`` is at or before the double-length time ``hi + lo``."""
     return bool(row < hi or (row == hi and not lo < 0))
-
-
-class ZeroSteps:
-    """Whether heyoka is taking steps of size zero (:func:`.causes.zero_step`), which it
-    goes on taking to its step limit, seen by a per-step callback (:meth:`step`: this many
-    in a row) or, between steps, by the thread that waits for the run (:meth:`watch`: the
-    last step of size zero and the time unchanged at :attr:`LOOKS` looks in a row)."""
-
-    #: Steps of size zero in a row that a per-step callback takes for a stall.
-    IN_A_ROW = 100
-    #: Looks in a row (0.25 s apart) that find a step of size zero and the same time.
-    LOOKS = 4
-
-    def __init__(self) -> None:
-        self.seen = False
-        #: The time at which the run was found stalled.
-        self.at: Any = None
-        self._count = 0
-        self._looks = 0
-        self._time: Any = None
-
-    def step(self, ta: Any) -> bool:
-        """After a step: whether the run is stalled (then :attr:`seen`)."""
-        self._count = self._count + 1 if ta.last_h == 0 else 0
-        if self._count >= self.IN_A_ROW and not self.seen:
-            self.seen, self.at = True, ta.time
-        return self.seen
-
-    def watch(self, ta: Any, start: Any) -> bool:
-        """At a look from another thread: whether the run is stalled (then :attr:`seen`).
-        ``start``: the run's start time, where a fresh integrator's last step is zero."""
-        t = ta.time
-        still = ta.last_h == 0 and t == self._time and t != start
-        self._looks = self._looks + 1 if still else 0
-        if self._looks >= self.LOOKS and not self.seen:
-            self.seen, self.at = True, t
-        self._time = t
-        return self.seen
-
-
-class _ProgressCallback:
-    def __init__(self, progress: Progress, signals: DeferredSignals, zero: ZeroSteps) -> None:
-        self.progress = progress
-        self.signals = signals
-        self.zero = zero
-
-    def __call__(self, ta: Any) -> bool:
-        self.progress(ta.time)
-        return not (self.signals.received or self.zero.step(ta))
-
-
-class _SignalCallback:
-    """Stops heyoka after the step in which a signal was noted, or in a stall."""
-
-    def __init__(self, signals: DeferredSignals, zero: ZeroSteps) -> None:
-        self.signals = signals
-        self.zero = zero
-
-    def __call__(self, ta: Any) -> bool:
-        return not (self.signals.received or self.zero.step(ta))
-
-
-class _HeldProgress:
-    """The progress callback of a run's first call, which may be cut and taken again
-    (:meth:`Propagation._estimate`): the times are held, and reported by :meth:`release` once
-    the call's steps are kept, so that progress never goes back (and a caller that maps steps
-    to times, as the validation reports do, sees each kept step once)."""
-
-    def __init__(self, callback: _ProgressCallback) -> None:
-        self.callback = callback
-        self.times: list[Any] = []
-
-    def __call__(self, ta: Any) -> bool:
-        self.times.append(ta.time)
-        return not (self.callback.signals.received or self.callback.zero.step(ta))
-
-    def release(self) -> None:
-        for t in self.times:
-            self.callback.progress(t)
-        self.times.clear()

@@ -41,12 +41,13 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import causes, compiler, engine, recording, signals
+from . import causes, compiler, engine, recording
 from .event_parity import EventParity
 from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
 from .result import EventLog
 from .scene import IntegratorOptions
+from .signals import Cancel
 
 
 @dataclass
@@ -325,48 +326,6 @@ class _LaneRecorder:
 
     def take(self, lane: int) -> tuple[list[float], list[int]]:
         return self.times.pop(lane, []), self.directions.pop(lane, [])
-
-
-class Cancel(threading.Event):
-    """A cancel flag that also stops the batch calls in flight, as the engine's watch stops a
-    scalar run (:class:`cayley_heyoka.core.signals.Watch`): :meth:`set` makes the parameters of the
-    integrators stepping non-finite, so heyoka returns after its current step instead of at
-    the end of a call that may cover a member's whole span. What those calls computed is
-    dropped (their members are not finished)."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self._hooks: list[Callable[[], None]] = []
-        self._lock = threading.Lock()
-
-    def watch(self, hook: Callable[[], None]) -> None:
-        with self._lock:
-            self._hooks.append(hook)
-
-    def unwatch(self, hook: Callable[[], None]) -> None:
-        with self._lock:
-            self._hooks.remove(hook)
-
-    def set(self) -> None:
-        super().set()
-        if self._poke():
-            # Steps of size zero (:func:`.causes.zero_step`) write back the state they read
-            # and do not see the parameters: poisoned again until every call has returned.
-            threading.Thread(target=self._keep_poking, daemon=True).start()
-
-    def _poke(self) -> bool:
-        """Call the hooks of the calls in flight; whether there were any."""
-        with self._lock:
-            hooks = list(self._hooks)
-        for hook in hooks:
-            hook()
-        return bool(hooks)
-
-    def _keep_poking(self) -> None:
-        while True:
-            time.sleep(signals.REPOISON)
-            if not self._poke():
-                return
 
 
 class _Poison:

@@ -127,8 +127,9 @@ def integrate_members(
 ) -> Chunk:
     """The second half of :func:`propagate_members`: integrate the groups and fill the rows.
 
-    ``cancel``, once set, ends the lanes (within a step if a :class:`.lanes.Cancel`); the
-    chunk is then incomplete: the caller drops it.
+    ``cancel``, once set, ends the lanes (within a step if a
+    :class:`~cayley_heyoka.core.signals.Cancel`); the chunk is then incomplete: the caller
+    drops it.
     """
     part, groups = prepared
     for group in groups.values():

@@ -25,7 +25,7 @@ from typing import Any
 
 from ..core.files import WriteFailed
 from ..core.scene import Scene
-from ..core.signals import begin_work, held_signals
+from ..core.signals import Cancel, begin_work, held_signals
 from . import sweep_dask
 from .members import integrate_members, prepare_members, propagate_members, split
 from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
@@ -73,13 +73,11 @@ def _pipeline(
     """Chunk by chunk, building the next chunk's models while the current one integrates:
     heyoka steps without the GIL, so the Python work of one overlaps the stepping of the other.
     An exception (Ctrl-C in ``take``'s progress) cancels the chunk in flight (dropped: its
-    members stay NOT_RUN) within a step (:class:`.lanes.Cancel`)."""
+    members stay NOT_RUN) within a step (:class:`~cayley_heyoka.core.signals.Cancel`)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from ..core import lanes
-
     prec = study.precision
-    cancel = lanes.Cancel()
+    cancel = Cancel()
     pending = None
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
