@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import free_body
+from helpers import SLOW_COMPILE, free_body
 
 import cayley_heyoka as ch
 from cayley_heyoka.core import compiler, engine
@@ -235,21 +235,6 @@ def test_a_run_going_non_finite_logs_nothing(capfd):
         ch.run(ch.Scene.from_dict(data))
     captured = capfd.readouterr()
     assert "warning" not in captured.err + captured.out
-
-
-SLOW_COMPILE = """
-[body]
-inertia = [1.0, 1.5, 2.5]
-[initial]
-rates = [0.125, 0.25, 1.0]
-[forces.potential]
-V = "{V}"
-[integrator]
-precision = "quad"
-compact_mode = false
-[output]
-times = [0, 1]
-"""
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

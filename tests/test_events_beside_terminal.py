@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import ORBIT_ELEMENTS
 
 import cayley_heyoka as ch
 from cayley_heyoka.workflows.checkpoint import CheckpointedRun
@@ -41,14 +42,7 @@ def orbit(
     body = {
         "mu": "1",
         "formulation": formulation,
-        "elements": {
-            "a": "1",
-            "e": "0.1",
-            "inclination": "0.3",
-            "node": "0",
-            "argument_of_pericentre": "0.3",
-            "mean_anomaly": "0",
-        },
+        "elements": dict(ORBIT_ELEMENTS),
     }
     if sigma0 is not None:
         body["sigma0"] = sigma0

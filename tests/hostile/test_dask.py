@@ -15,25 +15,16 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from helpers import SMALL_BODY
 
 from cayley_heyoka.workflows import sweep as sweep_module
 from cayley_heyoka.workflows import sweep_dask
 
 pytest.importorskip("distributed")
 
-SCENE = """
-[body]
-inertia = [1.0, 1.5, 2.5]
-[initial]
-rates = [0.125, 0.25, 1.0]
-rodrigues = [0.1, 0.2, -0.3]
-[output]
-times = { start = 0.0, stop = 1.0, count = 3 }
-"""
-
 
 def _study(tmp_path: Path, run: str = "") -> Path:
-    (tmp_path / "free.toml").write_text(SCENE)
+    (tmp_path / "free.toml").write_text(SMALL_BODY)
     study = tmp_path / "study.toml"
     study.write_text(
         'scene = "free.toml"\n[sweep]\nkind = "grid"\n[sweep.parameters]\n'

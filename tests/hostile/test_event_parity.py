@@ -14,22 +14,14 @@ import re
 import signal
 
 import pytest
+from helpers import ORBIT_ELEMENTS
 
 import cayley_heyoka as ch
 from cayley_heyoka.workflows.sweep_result import load_sweep
 
-ELEMENTS = {
-    "a": "1",
-    "e": "0.1",
-    "inclination": "0.3",
-    "node": "0",
-    "argument_of_pericentre": "0.3",
-    "mean_anomaly": "0",
-}
-
 
 def orbit(formulation="cayley", sigma0=None, **elements) -> dict:
-    body = {"mu": "1", "formulation": formulation, "elements": {**ELEMENTS, **elements}}
+    body = {"mu": "1", "formulation": formulation, "elements": {**ORBIT_ELEMENTS, **elements}}
     if sigma0 is not None:
         body["sigma0"] = sigma0
     return {

@@ -12,12 +12,12 @@ traceback, no hang, no NaN in a completed summary.
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
 import pytest
 import schema
 from conftest import Raw, toml
+from helpers import with_value
 
 from cayley_heyoka.core.errors import SceneError
 
@@ -78,15 +78,6 @@ def _get(doc: Any, path: tuple) -> Any:
     return doc
 
 
-def _with(doc: dict, path: tuple, value: Any) -> dict:
-    doc = copy.deepcopy(doc)
-    node = doc
-    for key in path[:-1]:
-        node = node[key]
-    node[path[-1]] = value
-    return doc
-
-
 def _field(path: tuple) -> str:
     out = ""
     for key in path:
@@ -133,7 +124,7 @@ def test_hostile_values_of_every_key(hostile, tmp_path, key):
     base = schema.document(key)
     wrong, accepted = [], []
     for value in palette(_get(base, key.path)):
-        doc = _with(base, key.path, value)
+        doc = with_value(base, key.path, value)
         try:
             schema.parse(key.kind, doc)
         except SceneError as exc:

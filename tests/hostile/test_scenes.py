@@ -8,7 +8,6 @@ non-table. The rest are the classes of issue 15 §2, one case or more each.
 
 from __future__ import annotations
 
-import copy
 import re
 import signal
 import tomllib
@@ -17,6 +16,7 @@ from typing import Any
 
 import pytest
 from conftest import Raw, toml
+from helpers import with_value
 
 from cayley_heyoka import load_result
 from cayley_heyoka.core import scene as scene_module
@@ -52,15 +52,6 @@ def _tables(data: Any, path: tuple = ()) -> list[tuple]:
         return []
     out = [path] if path else []
     return out + [p for k, v in data.items() for p in _tables(v, (*path, k))]
-
-
-def _set(data: dict, path: tuple, value: Any) -> dict:
-    data = copy.deepcopy(data)
-    node = data
-    for key in path[:-1]:
-        node = node[key]
-    node[path[-1]] = value
-    return data
 
 
 def _field(path: tuple) -> str:
@@ -100,7 +91,7 @@ def _number_cases() -> list:
 
 @pytest.mark.parametrize(("name", "path", "value"), _number_cases())
 def test_numeric_leaf_of_wrong_type_or_not_finite(hostile, name, path, value):
-    scene = hostile.scene(_set(small(name), path, value))
+    scene = hostile.scene(with_value(small(name), path, value))
     hostile.run(["run", str(scene), "--no-progress"], expect="refused", field=_field(path))
 
 
@@ -130,7 +121,7 @@ def test_text_or_boolean_leaf_given_a_number(hostile, name, path):
     value = 42
     if path[-1] == "formulation" and "orbit" in path:
         value = Raw("0.5")
-    scene = hostile.scene(_set(data, path, value))
+    scene = hostile.scene(with_value(data, path, value))
     hostile.run(["run", str(scene), "--no-progress"], expect="refused", field=_field(path))
 
 
@@ -154,7 +145,7 @@ def test_table_with_unknown_key_or_not_a_table(hostile, name, path, how):
         node["colour"] = "red"
         field = ".".join([*path, "colour"]) if path != ("output", "times") else "output.times"
     else:
-        data = _set(data, path, "a string")
+        data = with_value(data, path, "a string")
         field = path[0]
     scene = hostile.scene(data)
     hostile.run(["run", str(scene), "--no-progress"], expect="refused", field=field)
@@ -352,7 +343,7 @@ def test_model_values(hostile, name, path, value, field, words):
         data["hamiltonian"] = {"H": "varpi1**2/2 + eta1**2/2"}
         data["initial"] = {"eta": [1], "varpi": [0]}
     o = hostile.run(
-        ["run", str(hostile.scene(_set(data, path, value))), "--no-progress"],
+        ["run", str(hostile.scene(with_value(data, path, value))), "--no-progress"],
         expect="refused",
         field=field,
     )

@@ -25,33 +25,11 @@ from pathlib import Path
 
 import pytest
 from conftest import Outcome, _judge
+from helpers import SLOW_COMPILE, SMALL_BODY
 
 from cayley_heyoka import load_result
 
-SMALL = """
-[body]
-inertia = [1.0, 1.5, 2.5]
-[initial]
-rates = [0.125, 0.25, 1.0]
-rodrigues = [0.1, 0.2, -0.3]
-[output]
-times = { start = 0.0, stop = 1.0, count = 3 }
-"""
-
 # Non-compact quad of a long potential: LLVM compiles it for minutes.
-SLOW_COMPILE = """
-[body]
-inertia = [1.0, 1.5, 2.5]
-[initial]
-rates = [0.125, 0.25, 1.0]
-[forces.potential]
-V = "{V}"
-[integrator]
-precision = "quad"
-compact_mode = false
-[output]
-times = [0, 1]
-"""
 
 CLI = [sys.executable, "-m", "cayley_heyoka.cli"]
 
@@ -111,7 +89,7 @@ def _ended_before_any_work(o: Outcome, sig: int, tmp_path: Path, scene: Path) ->
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_as_main_starts_ends_the_command_at_once(hostile, tmp_path, sig):
     """Sent as soon as main's policy is in place: the imports have not begun."""
-    scene = hostile.scene(SMALL)
+    scene = hostile.scene(SMALL_BODY)
     argv = ["run", str(scene), "--out", str(tmp_path / "r.h5"), "--no-progress"]
     o = _signalled(argv, sig, _policy_installed, 0.0)
     _ended_before_any_work(o, sig, tmp_path, scene)
@@ -124,7 +102,7 @@ def test_a_signal_while_heyoka_imports_sympy_ends_the_command_at_once(
 ):
     """A KeyboardInterrupt raised inside this import gave 'ImportError: initialization failed'
     or "module 'sympy' has no attribute 'core'" tracebacks, or was swallowed (the run went on)."""
-    scene = hostile.scene(SMALL)
+    scene = hostile.scene(SMALL_BODY)
     argv = ["run", str(scene), "--out", str(tmp_path / "r.h5"), "--no-progress"]
     o = _signalled(argv, sig, _heyoka_mapped, delay)
     _ended_before_any_work(o, sig, tmp_path, scene)
@@ -169,7 +147,7 @@ def result_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
     import cayley_heyoka as ch
 
     out = tmp_path_factory.mktemp("result") / "r.h5"
-    ch.run(ch.Scene.from_toml(SMALL)).save(out)
+    ch.run(ch.Scene.from_toml(SMALL_BODY)).save(out)
     return out
 
 
@@ -178,7 +156,7 @@ def test_run_with_every_standard_stream_closed_writes_its_result(hostile, tmp_pa
     """stdout closed: 'NoneType' object has no attribute 'write', exit 1. With all three
     closed the result file took descriptor 1, where C++ logs write: it must be whole."""
     out = tmp_path / "r.h5"
-    argv = ["run", str(hostile.scene(SMALL)), "--out", str(out), "--no-progress"]
+    argv = ["run", str(hostile.scene(SMALL_BODY)), "--out", str(out), "--no-progress"]
     _judge(_with_streams(argv, "exec <&- >&- 2>&-"), "done", None, out, 120)
     assert len(load_result(out).t) == 3
 
@@ -210,7 +188,7 @@ class _Full(io.TextIOBase):
 def test_a_full_stdout_changes_nothing_but_the_report(hostile, tmp_path, monkeypatch, verb):
     """'OSError: [Errno 28] No space left on device' escaped main; the work is kept and said
     to be unreported, once, on stderr."""
-    scene = hostile.scene(SMALL, "free.toml")
+    scene = hostile.scene(SMALL_BODY, "free.toml")
     out = None
     argv = ["check", str(scene)]
     if verb == "sweep":
