@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import heyoka as hy
+import numpy as np
 
 from .errors import SceneError
 from .model import Model
@@ -198,16 +199,19 @@ class EventValues:
         self._function = function
         self._held = function.nparams
 
-    def at(self, state: Any, pars: Any, t: Any) -> tuple[list[int], list[int]]:
-        """The signs (0: zero or NaN) of each expression and of its time derivative at
-        ``state`` (one state, the run's precision), the whole parameter vector ``pars`` and
-        the time ``t``."""
-        kwargs: dict[str, Any] = {"time": t}
+    def at(self, states: Any, pars: Any, times: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The signs (0: zero or NaN) of each expression and of its time derivative at each
+        of ``states`` (shape (n, variables), the run's precision), with its whole parameter
+        vector (``pars``, shape (n, parameters)) and its time (``times``, shape (n,)): two
+        integer arrays of shape (n, events). One call for many states: a call costs ~10 µs
+        of heyoka's Python binding, whatever it evaluates."""
+        kwargs: dict[str, Any] = {"time": times}
         if self._held:
-            kwargs["pars"] = pars[: self._held]
-        values = [1 if v > 0 else -1 if v < 0 else 0 for v in self._function(state, **kwargs)]
-        n = len(values) // 2
-        return values[:n], values[n:]
+            kwargs["pars"] = np.ascontiguousarray(pars[:, : self._held].T)
+        values = self._function(np.ascontiguousarray(states.T), **kwargs)
+        signs = (values > 0).astype(np.int8) - (values < 0).astype(np.int8)
+        n = len(signs) // 2
+        return signs[:n].T, signs[n:].T
 
 
 _EVENT_VALUES: dict[str, EventValues] = {}

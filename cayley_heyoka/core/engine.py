@@ -158,6 +158,8 @@ class Propagation:
         stretch's rows itself passes False and gives them back to :meth:`result`).
     """
 
+    _parity: EventParity | None  # the crossings beside terminal events (None: not needed)
+
     def __init__(self, scene: Scene, progress: Progress | None = None, keep: bool = True) -> None:
         self._wall0 = time.perf_counter()
         self.scene = scene
@@ -490,6 +492,11 @@ class Propagation:
         ):
             ev.callback.times, ev.callback.directions = times, directions
         values = compiled.event_values
+        if self._parity is not None:
+            if values is not None:
+                self._parity.flush(self._crossings())  # the states noted, in the old terms
+            else:
+                self._parity.finish(self._crossings())  # and decided: none follow
         if values is None:
             self._parity = None
         elif self._parity is None:
@@ -611,10 +618,9 @@ class Propagation:
         return [(rec.times, rec.directions) for rec in self._recorders]
 
     def _settle(self, ta: Any, t: Any) -> None:
-        """After a terminal handler at ``t``: account for every crossing of the recorded
-        events beside it (:class:`EventParity`)."""
+        """After a terminal handler at ``t``: note the state for :class:`EventParity`."""
         if self._parity is not None:
-            self._parity.settle(ta.state, self._pars, t, self._crossings())
+            self._parity.note(ta.state, self._pars, t, self._crossings())
 
     def _pass_rows(self, dtime: tuple[Any, Any]) -> None:
         """The output rows up to ``dtime`` (a terminal event's double-length time) were
@@ -633,6 +639,8 @@ class Propagation:
         if self.status != 0:
             raise ValueError(f"a stopped run cannot be continued: {self.message}")
         prec, ta = self.precision, self._ta
+        if self._parity is not None:
+            self._parity.flush(self._crossings())  # the records as they stand
         return {
             "variant": self.model.variant,
             "done": self.done,

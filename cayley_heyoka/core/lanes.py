@@ -704,7 +704,7 @@ class _Lanes:
         if m.parity is not None:
             self._gather(lane, m)
             state = np.ascontiguousarray(ta.state[:, lane])
-            m.parity.settle(state, m.pars, t, m.crossings())
+            m.parity.note(state, m.pars, t, m.crossings())
         if self._cancelled():
             ta.pars[:, lane] = np.nan  # a Cancel's poison was overwritten just above
         return True
