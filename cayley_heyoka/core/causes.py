@@ -27,10 +27,6 @@ named (``body.inertia, initial.rates``), never the derived quantity alone.
 The expressions of the scene's text are evaluated at the start of every run that has any
 (:func:`check_sources`, with a compiled function kept per model structure): no output need
 show them.
-
-Midway, a run can stop on a step of size zero (:func:`zero_step`), which every path that
-integrates (the single run, the batch lanes, heyoka's ensemble) names in one message
-(:func:`zero_step_message`).
 """
 
 from __future__ import annotations
@@ -480,28 +476,3 @@ def _show(value: Any) -> str:
     """``value`` (of any precision) to 6 significant digits."""
     with mpmath.workdps(20):
         return mpmath.nstr(mpmath.mpf(str(value)), 6)
-
-
-def zero_step(outcome: Any, min_h: Any) -> bool:
-    """Whether a heyoka call ended on a step of size zero (``min_h``: the call's smallest
-    step): heyoka then reports ``step_limit`` whatever its step count, and every later call
-    ends at once, at the same time — the run cannot go on.
-
-    A Taylor coefficient that is not finite where the state is finite does it: an event's
-    expression or a right-hand side at a zero of a square root, a fractional power or a
-    logarithm (``events.e.expression = "sqrt(z)"`` where z reaches 0).
-    """
-    return outcome == hy.taylor_outcome.step_limit and min_h == 0
-
-
-def zero_step_message(model: Model, t: Any) -> str:
-    """What a run whose step size fell to zero at ``t`` (:func:`zero_step`) says."""
-    where = "the equations of motion"
-    if model.events:
-        names = ", ".join(repr(e.name) for e in model.events)
-        where += f" or of an event's expression (output.events: {names})"
-    return (
-        f"the step size fell to zero at t = {t}: a Taylor coefficient of {where} is not "
-        "finite there (a square root, a fractional power or a logarithm at its zero); "
-        "results kept up to there"
-    )

@@ -30,7 +30,8 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from .causes import check_sources, explain_start, start_failure, zero_step, zero_step_message
+from . import outcomes
+from .causes import check_sources, explain_start, start_failure
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .event_parity import EventParity
@@ -296,7 +297,7 @@ class Propagation:
         """Called by :class:`Watch` while heyoka steps: whether the run must be stopped by
         poisoning its state as well as its parameters, which it then does.
 
-        Steps of size zero (:func:`.causes.zero_step`) see neither the parameters nor change
+        Steps of size zero (:func:`.outcomes.zero_step`) see neither the parameters nor change
         the state, and heyoka goes on taking them to its step limit: stopped so when a signal
         has not stopped the run within a wait, or when the waits found heyoka's last step of
         size zero and its time unchanged for a second (:class:`ZeroSteps`). Poisoned again
@@ -370,7 +371,8 @@ class Propagation:
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
             outcome, out = res[0], res[-1]
             taken = self.counters["steps"] + res[3]
-            stuck = not self._signals.received and (zero_step(outcome, res[1]) or self._zero.seen)
+            zero = outcomes.zero_step(outcome, res[1]) or self._zero.seen
+            stuck = zero and not self._signals.received
             cut = (
                 probe is not None
                 and outcome == hy.taylor_outcome.step_limit
@@ -400,7 +402,7 @@ class Propagation:
                 continue
             if stuck:
                 when = self._zero.at if self._zero.seen else ta.time
-                self.status, self.message = -1, zero_step_message(self.model, when)
+                self.status, self.message = -1, outcomes.zero_step_message(self.model, when)
                 break
             if outcome == hy.taylor_outcome.step_limit:
                 self._out_of_steps(budget)
@@ -413,15 +415,13 @@ class Propagation:
             if outcome == hy.taylor_outcome.err_nf_state:
                 # heyoka's time may itself be NaN then: name the last output time kept instead.
                 when = ta.time if math.isfinite(float(ta.time)) else grid[max(self.done - 1, 0)]
-                self.message = (
-                    f"the state became non-finite after t = {when}; results kept up to there"
-                )
+                self.message = outcomes.nonfinite(when)
                 if self.done == 0 and (cause := self._cause_at_start()) is not None:
                     raise cause  # the first step cannot be taken: nothing was integrated
             elif outcome == hy.taylor_outcome.cb_stop:
                 self.message = f"stopped by the progress callback at t = {ta.time}"
             else:
-                self.message = f"stopped at t = {ta.time} with outcome {outcome}"
+                self.message = outcomes.other(outcome, ta.time)
 
     def _cause_at_start(self) -> SceneError | None:
         """Why the first step could not be finite: the first of the model's expressions and
@@ -574,11 +574,7 @@ class Propagation:
         return steps * (stop - start) / covered
 
     def _out_of_steps(self, budget: int) -> None:
-        self.status = -1
-        self.message = (
-            f"the step budget integrator.max_steps = {budget} was spent at t = {self._ta.time}; "
-            "results kept up to there (raise integrator.max_steps to go on)"
-        )
+        self.status, self.message = -1, outcomes.out_of_steps(budget, self._ta.time)
 
     def _on_terminal(self, index: int, ta: Any) -> bool:
         """Terminal event ``index`` reached, within heyoka's call: run its handler; whether

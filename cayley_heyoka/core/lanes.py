@@ -41,7 +41,7 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import causes, compiler, engine, recording
+from . import compiler, engine, outcomes, recording
 from .event_parity import EventParity
 from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
@@ -640,21 +640,21 @@ class _Lanes:
         code = int(outcome)
         if m.status != 0 or (t == points[-1] and m.done == len(self.grid)):
             pass  # stopped by its handler (status set), or every output reached
-        elif causes.zero_step(outcome, res[1]):
-            m.status, m.message = -1, causes.zero_step_message(self.model, t)
+        elif outcomes.zero_step(outcome, res[1]):
+            m.status, m.message = -1, outcomes.zero_step_message(self.model, t)
         elif m.steps >= self.budget:
             self._out_of_steps(m, t)
         elif outcome == hy.taylor_outcome.err_nf_state:
             m.status, m.nonfinite = -1, True
             when = t if np.isfinite(t) else self.grid[max(m.done - 1, 0)]
-            m.message = f"the state became non-finite after t = {when}; results kept up to there"
+            m.message = outcomes.nonfinite(when)
         elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit) or code >= 0:
             pass  # another lane stopped the call, this one at the end of a whole step
         elif code < 0 and -code - 1 < len(self.model.terminal):
             pass  # its twin's handler stopped (the lane stands where its own would have)
         elif outcome != hy.taylor_outcome.time_limit:
             m.status = -1
-            m.message = f"stopped at t = {t} with outcome {outcome}"
+            m.message = outcomes.other(outcome, t)
         self._record_trivial(j)
 
     def _gather(self, j: int, m: _Member) -> None:
@@ -710,11 +710,7 @@ class _Lanes:
         return True
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
-        m.status = -1
-        m.message = (
-            f"the step budget integrator.max_steps = {self.budget} was spent at t = {t}; "
-            "results kept up to there (raise integrator.max_steps to go on)"
-        )
+        m.status, m.message = -1, outcomes.out_of_steps(self.budget, t)
 
     def _finish(self, j: int, m: _Member) -> None:
         """Hand lane ``j``'s member ``m`` to the results; the lane takes the next one."""

@@ -250,7 +250,7 @@ class Watch:
         that nothing steps the integrator behind the caller's back. ``again`` is called while
         the job runs (every 0.25 s, and every :data:`REPOISON` s once it has returned true:
         a signal noted that has not stopped the job yet), to stop it harder: steps of size
-        zero (:func:`.causes.zero_step`) do not see the poisoned parameters.
+        zero (:func:`.outcomes.zero_step`) do not see the poisoned parameters.
         """
         with self._lock:
             if self._thread is None or not self._thread.is_alive():
@@ -313,7 +313,7 @@ class Cancel(threading.Event):
     def set(self) -> None:
         super().set()
         if self._poke():
-            # Steps of size zero (:func:`.causes.zero_step`) write back the state they read
+            # Steps of size zero (:func:`.outcomes.zero_step`) write back the state they read
             # and do not see the parameters: poisoned again until every call has returned.
             threading.Thread(target=self._keep_poking, daemon=True).start()
 

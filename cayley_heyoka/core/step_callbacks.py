@@ -3,7 +3,7 @@
 A run stops after the step in which a signal was noted (:class:`SignalCallback`, or the
 progress bar's :class:`ProgressCallback`), and when heyoka takes steps of size zero, which it
 would go on taking to its step limit without counting them (:class:`ZeroSteps`,
-:func:`.causes.zero_step`).
+:func:`.outcomes.zero_step`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ Progress = Callable[[Any], None]
 
 
 class ZeroSteps:
-    """Whether heyoka is taking steps of size zero (:func:`.causes.zero_step`), which it
+    """Whether heyoka is taking steps of size zero (:func:`.outcomes.zero_step`), which it
     goes on taking to its step limit, seen by a per-step callback (:meth:`step`: this many
     in a row) or, between steps, by the thread that waits for the run (:meth:`watch`: the
     last step of size zero and the time unchanged at :attr:`LOOKS` looks in a row)."""

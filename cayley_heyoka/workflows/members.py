@@ -314,7 +314,7 @@ def _ensemble_group(
     """Members sharing compiled code and without terminal events: heyoka's ensemble."""
     import heyoka as hy
 
-    from ..core import causes, compiler, recording
+    from ..core import compiler, outcomes, recording
 
     _, scene0, model0 = group[0]
     compiled, cached = compiler.compile_model(model0, scene0.integrator)
@@ -356,15 +356,15 @@ def _ensemble_group(
             part.status[row], part.message[row] = OK, "every output time was reached"
         else:
             # heyoka's time is NaN once the state is: name the last output time kept instead.
-            kept = f"t = {grid[reached - 1]}" if reached else "the start"
-            why = {
-                hy.taylor_outcome.err_nf_state: "the state became non-finite",
-                hy.taylor_outcome.step_limit: "the step budget integrator.max_steps was spent",
-            }.get(outcome, f"stopped with outcome {outcome}")
-            if causes.zero_step(outcome, run[2]):
-                part.message[row] = causes.zero_step_message(model, ta.time)
+            kept = grid[reached - 1] if reached else grid[0]
+            if outcomes.zero_step(outcome, run[2]):
+                part.message[row] = outcomes.zero_step_message(model, ta.time)
+            elif outcome == hy.taylor_outcome.err_nf_state:
+                part.message[row] = outcomes.nonfinite(kept)
+            elif outcome == hy.taylor_outcome.step_limit:
+                part.message[row] = outcomes.out_of_steps(scene0.integrator.max_steps, ta.time)
             else:
-                part.message[row] = f"{why} after {kept} (the last output time kept)"
+                part.message[row] = outcomes.other(outcome, ta.time)
         part.steps[row] = nsteps
         logs = recording.event_logs(model, ta, prec)
         for name in layout.events:
