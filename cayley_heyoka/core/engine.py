@@ -306,7 +306,7 @@ class Propagation:
         ta = self._ta
         if not (self._poisoning and ta is not None):
             return False
-        if not (self._signals.received or self._zero.watch(ta, self.grid[0])):
+        if not (self._signals.received or self._zero.watch(ta, self._began)):
             return False
         ta.pars[self.compiled.rhs_pars] = np.nan
         ta.state[:] = np.nan
@@ -432,7 +432,7 @@ class Propagation:
 
     def _fresh_integrator(self) -> Any:
         ta = self.compiled.take()
-        ta.time = self.grid[0]
+        ta.time = self._began = self.grid[0]  # (a fresh integrator's last step is 0)
         ta.state[:] = self._initial
         for ev in ta.t_events if self.model.terminal else ():
             ev.callback.target = self._on_terminal
@@ -466,6 +466,7 @@ class Propagation:
         if not cached:
             self._compile_seconds += compiled.compile_seconds
         dtime, state = old.dtime, old.state.copy()
+        self._began = old.time
         recorded = [
             (list(ev.callback.times), list(ev.callback.directions))
             for ev in (old.nt_events if model.events else [])

@@ -53,7 +53,8 @@ class ZeroSteps:
 
     def watch(self, ta: Any, start: Any) -> bool:
         """At a look from another thread: whether the run is stalled (then :attr:`seen`).
-        ``start``: the run's start time, where a fresh integrator's last step is zero."""
+        ``start``: where the integrator began (the run's start, a hand-over), at which a fresh
+        integrator's last step is zero before its first step ends."""
         t = ta.time
         still = ta.last_h == 0 and t == self._time and t != start
         self._looks = self._looks + 1 if still else 0
