@@ -16,7 +16,7 @@ import pytest
 from helpers import SLOW_COMPILE, free_body
 
 import cayley_heyoka as ch
-from cayley_heyoka.core import compiler, engine
+from cayley_heyoka.core import compiler, engine, span_probe
 from cayley_heyoka.core.errors import IntegrationError, Interrupted, SceneError
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -288,8 +288,8 @@ def test_a_span_within_the_budget_runs(monkeypatch):
         return ch.Scene.from_dict(data)
 
     whole = ch.run(scene())
-    assert whole.counters["steps"] > 2 * max(engine._PROBES)
-    monkeypatch.setattr(engine, "_PROBES", ())
+    assert whole.counters["steps"] > 2 * max(span_probe.PROBES)
+    monkeypatch.setattr(span_probe, "PROBES", ())
     uncut = ch.run(scene())
     assert whole.counters == uncut.counters
     _same(whole, uncut)

@@ -24,7 +24,6 @@ import time
 import warnings
 import weakref
 from collections.abc import Callable
-from fractions import Fraction
 from typing import Any
 
 import heyoka as hy
@@ -37,11 +36,12 @@ from .errors import IntegrationError, Interrupted, SceneError
 from .event_parity import EventParity
 from .families import FAMILIES
 from .model import Handover, Model, call_handler, own_terminal
-from .precision import Precision, approx, exact_fraction
+from .precision import Precision
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, start_values
 from .result import Result, versions
 from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals, held_signals
+from .span_probe import SpanProbe
 from .step_callbacks import HeldProgress, Progress, ProgressCallback, SignalCallback, ZeroSteps
 
 __all__ = ["Progress", "Propagation", "model_of", "preflight", "run"]
@@ -217,9 +217,7 @@ class Propagation:
         self._next_row: Any = None
         #: Output times recorded so far.
         self.done = 0
-        # The first steps estimate what the whole span needs (``_estimate``): the limits of
-        # the probing calls still to make, each cut short to take them and then taken again.
-        self._probes = list(_PROBES)
+        self._probe = SpanProbe(scene, self.grid[0])
 
     @property
     def time(self) -> Any:
@@ -257,8 +255,8 @@ class Propagation:
                 if not self._poisoning:
                     self._propagate(until, end, budget, states, pars_rows)
                 else:
-                    if self._probes:
-                        # The first call takes at most _PROBES[0] steps (µs in double): here,
+                    if self._probe.limit is not None:
+                        # The first call takes at most PROBES[0] steps (µs in double): here,
                         # without a thread; a run that needs no more ends with it.
                         self._propagate(until, end, budget, states, pars_rows, calls=1)
                     if self.status == 0 and (self.done < end or self._ta.time < until):
@@ -361,7 +359,7 @@ class Propagation:
             callback: Callable[[Any], bool] | None = self._callback
             if callback is None and self._signals.active and not self._poisoning:
                 callback = SignalCallback(self._signals, self._zero)
-            probe = self._probes[0] if self._probes else None
+            probe = self._probe.limit
             limit = left if probe is None else min(left, probe)
             if probe is not None and isinstance(callback, ProgressCallback):
                 # Progress is reported once a step is kept: a cut probe is taken again.
@@ -380,7 +378,7 @@ class Propagation:
                 and not stuck
             )
             if probe is not None:
-                self._estimate(taken, ta.dtime, budget, cut)
+                self._probe.after(taken, ta.dtime, budget, cut)
             if cut:
                 # Resuming this call would change bits (see below): start again, uncut.
                 ta = self._restart()
@@ -525,55 +523,6 @@ class Propagation:
         self._start_parity()
         return ta
 
-    def _estimate(self, steps: int, reached: Any, budget: int, cut: bool) -> None:
-        """After a probing call: refuse a run whose first steps show it needs far more steps
-        than its budget, or decide whether a longer probe must look first. ``reached`` is
-        heyoka's double-length time (hi, lo): at t = -1e25 a double's hi part does not move
-        for millions of steps of length 1, while the lo part counts them.
-
-        A span of 1e300 would otherwise spend the whole budget (10⁹ steps: many minutes)
-        before stopping. The rate of the first steps (those of a probing call, at most
-        :data:`_PROBES`) extrapolated over the span must stay within :data:`ESTIMATE_MARGIN`
-        times the budget; the margin leaves room for motions whose steps lengthen (an
-        estimate, so only the absurd is refused). The first probe is short, so that a run
-        pays for it a few steps only: when its estimate is not :data:`_CLEAR` times inside
-        the limit, a longer probe decides.
-        """
-        probes = self._probes
-        probes.pop(0)
-        if not cut:
-            probes.clear()  # the call ended of itself: nothing is taken again
-        needed = self._needed(steps, reached) if steps >= _PROBES[0] else None
-        if needed is None:
-            return
-        limit = ESTIMATE_MARGIN * budget
-        if cut and probes and needed * _CLEAR > limit:
-            return  # not clearly within the budget: the next, longer probe decides
-        probes.clear()
-        if needed > limit:
-            first, last = self.scene.output.span()
-            raise SceneError(
-                "output.times",
-                f"the span to t = {last} needs about {approx(needed)} steps (the first "
-                f"{steps} reached t = {reached[0]}), more than {ESTIMATE_MARGIN} times the "
-                f"step budget integrator.max_steps = {budget}; shorten the span, or raise "
-                "integrator.max_steps if the steps will lengthen",
-            )
-
-    def _needed(self, steps: int, reached: Any) -> Fraction | None:
-        """The steps the whole span needs at the rate of ``steps`` to ``reached`` (None if
-        that cannot be told: no time covered, or a non-finite time)."""
-        # From the start the integrator took (the checked grid's), to the (hi, lo) time.
-        start = exact_fraction(str(self.grid[0]))
-        stop = exact_fraction(self.scene.output.span()[1])
-        try:
-            covered = sum(exact_fraction(str(part)) for part in reached) - start
-        except (ValueError, ArithmeticError):  # the state (and heyoka's time) became NaN
-            return None
-        if covered <= 0:
-            return None
-        return steps * (stop - start) / covered
-
     def _out_of_steps(self, budget: int) -> None:
         self.status, self.message = -1, outcomes.out_of_steps(budget, self._ta.time)
 
@@ -670,8 +619,7 @@ class Propagation:
         if variant != self.model.variant:
             self._take_over(variant)
         prec, ta = self.precision, self._ta
-        # Its first steps were taken (and the span estimated) before the snapshot.
-        self._probes = []
+        self._probe.done()  # its first steps were taken (and the span estimated) before
         self.done = int(snapshot["done"])
         hi, lo = prec.from_text(snapshot["time"])
         ta.dtime = (hi, lo)
@@ -748,15 +696,6 @@ class Propagation:
 
 
 # ---------------------------------------------------------------------- internals
-#: Steps at most of a run's probing calls (a run that needs more starts again after each, so
-#: that its bits do not depend on the cut; :meth:`Propagation._estimate` extrapolates from
-#: them): a short one, and a longer one only when the short one's estimate is not
-#: ``_CLEAR`` times inside ``ESTIMATE_MARGIN`` times the budget.
-_PROBES = (16, 1_000)
-_CLEAR = 100
-ESTIMATE_MARGIN = 10
-
-
 def _starting_at(prec: Precision, t: Any, points: np.ndarray) -> np.ndarray:
     """``points`` preceded by the current time ``t`` (heyoka's grids start there)."""
     if prec.kind != "real":

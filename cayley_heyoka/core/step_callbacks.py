@@ -89,7 +89,7 @@ class SignalCallback:
 
 class HeldProgress:
     """The progress callback of a run's first call, which may be cut and taken again
-    (:meth:`Propagation._estimate`): the times are held, and reported by :meth:`release` once
+    (:class:`.span_probe.SpanProbe`): the times are held, and reported by :meth:`release` once
     the call's steps are kept, so that progress never goes back (and a caller that maps steps
     to times, as the validation reports do, sees each kept step once)."""
 

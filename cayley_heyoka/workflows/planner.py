@@ -409,7 +409,8 @@ def _over(scene: Scene, times: list[Number], max_steps: int) -> Scene:
 
 def _pilot(scene: Scene, family: Family, formulation: str | None, span: float) -> list[Route]:
     """The double and quad routes of one formulation."""
-    from ..core.engine import ESTIMATE_MARGIN, preflight
+    from ..core.engine import preflight
+    from ..core.span_probe import ESTIMATE_MARGIN
 
     variants = {p: _variant(scene, family, formulation, p) for p in PRECISIONS}
     for variant in variants.values():
