@@ -557,7 +557,7 @@ def test_a_cancel_stops_the_batch_calls_in_flight(scene):
     out: list = []
     worker = threading.Thread(
         target=lambda: out.append(
-            lanes.propagate_members(model, member.integrator, grid, initial, pars, 1, cancel)
+            lanes.integrate_lanes(model, member.integrator, grid, initial, pars, 1, cancel)
         )
     )
     worker.start()

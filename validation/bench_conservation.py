@@ -255,7 +255,7 @@ def integrate(case: Case, job: dict[str, Any]) -> tuple[dict[str, list[np.ndarra
     """One batch of members in one thread: their signed drifts and steps, and the seconds."""
     t0 = time.perf_counter()
     models = job["models"]
-    runs = lanes.propagate_members(
+    runs = lanes.integrate_lanes(
         models[0],
         job["options"],
         job["grid"],

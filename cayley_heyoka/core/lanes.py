@@ -2,7 +2,7 @@
 
 A sweep's members share compiled code and differ in their numbers (initial state, runtime
 parameters). heyoka's batch integrator advances ``heyoka.recommended_simd_size()`` of them at
-once, each lane with its own step size; :func:`propagate_members` keeps every lane busy,
+once, each lane with its own step size; :func:`integrate_lanes` keeps every lane busy,
 handing a lane the next member when its member is done, and runs one batch integrator per
 worker thread (heyoka releases the GIL while it steps).
 
@@ -76,7 +76,7 @@ class LaneResult:
 
 @dataclass
 class Finals:
-    """What :func:`propagate_members` keeps with ``final_only``: each member's last state.
+    """What :func:`integrate_lanes` keeps with ``final_only``: each member's last state.
 
     ``failed`` maps a member that did not reach the last output time to its
     :class:`LaneResult` (its message, the time it reached).
@@ -211,7 +211,7 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
-def propagate_members(
+def integrate_lanes(
     model: Model,
     options: IntegratorOptions,
     grid: np.ndarray,

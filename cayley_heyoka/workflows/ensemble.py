@@ -334,7 +334,7 @@ def _lanes(
     grid = np.array([start, end], dtype=float)
     t0 = time.perf_counter()
     with compiler.quiet_heyoka():
-        finals = lanes.propagate_members(
+        finals = lanes.integrate_lanes(
             model,
             options,
             grid,

@@ -264,7 +264,7 @@ def _lanes_group(
     pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
     try:
         with compiler.quiet_heyoka():  # a member going non-finite is reported as such
-            runs = lanes.propagate_members(
+            runs = lanes.integrate_lanes(
                 model0,
                 scene0.integrator,
                 grid,
