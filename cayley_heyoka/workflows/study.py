@@ -26,7 +26,7 @@ import copy
 import itertools
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -116,26 +116,37 @@ class RunOptions:
 
     @classmethod
     def parse(
-        cls, table: Mapping[str, Any], where: str = "run", scheduler_field: str | None = None
+        cls,
+        table: Mapping[str, Any],
+        where: str = "run",
+        scheduler_field: str | None = None,
+        options: Iterable[str] = (),
     ) -> RunOptions:
+        """The options of ``table`` (the study's ``[run]``), refusals naming ``where.KEY``, or
+        the command-line option ``--KEY`` for the keys in ``options`` (overrides)."""
         check_keys(table, ["backend", "scheduler", "workers", "chunk"], where)
-        named = scheduler_field or f"{where}.scheduler"
+        given = set(options)
+
+        def name(key: str) -> str:
+            return f"--{key}" if key in given else f"{where}.{key}"
+
+        named = scheduler_field or name("scheduler")
         scheduler = table.get("scheduler")
         if scheduler is not None:
             check_address(scheduler, named)
         backend = table.get("backend", "dask" if scheduler else "local")
         if backend not in BACKENDS:
-            raise SceneError(f"{where}.backend", f"must be one of {BACKENDS}, got {backend!r}")
+            raise SceneError(name("backend"), f"must be one of {BACKENDS}, got {backend!r}")
         if scheduler and backend != "dask":
             raise SceneError(named, "is a Dask scheduler: it needs backend = 'dask'")
-        workers = _count(table.get("workers"), f"{where}.workers")
+        workers = _count(table.get("workers"), name("workers"))
         if scheduler and workers is not None:
             raise SceneError(
-                f"{where}.workers",
+                name("workers"),
                 "applies to this machine (threads, or the LocalCluster's processes); with a "
                 "scheduler the cluster's own workers run the sweep",
             )
-        chunk = _count(table.get("chunk"), f"{where}.chunk")
+        chunk = _count(table.get("chunk"), name("chunk"))
         return cls(backend, scheduler, workers, chunk, named)
 
 
@@ -543,4 +554,4 @@ def override_run(run: RunOptions, backend, scheduler, workers, chunk) -> RunOpti
     if not given:
         return run
     named = "--scheduler" if "scheduler" in given else run.scheduler_field
-    return RunOptions.parse(merged, "run (with the command-line options)", named)
+    return RunOptions.parse(merged, "run", named, options=given)

@@ -288,3 +288,30 @@ def test_value_beyond_double_range_is_summarised_not_as_inf(hostile, precision):
     o = hostile.run(["run", str(hostile.scene(data))], expect="done")
     (line,) = [ln for ln in o.stdout.splitlines() if ln.strip().startswith("energy")]
     assert line.split() == ["energy", "largest", "|value|", "5.831e+702"], line
+
+
+@pytest.mark.covers("class:11", "option:sweep --workers", "option:sweep --chunk", "study-key:run")
+@pytest.mark.parametrize("option", ["--workers", "--chunk"])
+def test_a_sweep_names_its_overriding_option_or_its_study_field(hostile, option):
+    """A bad count given on the command line names the option; one in the study's ``[run]``
+    table names that field (it was ``run (with the command-line options).workers``)."""
+    key = option[2:]
+    hostile.scene(
+        {
+            "body": {"inertia": ["1", "1.5", "2.5"]},
+            "initial": {"rates": ["0.3", "1", "0.5"]},
+            "output": {"times": [0, 1]},
+        },
+        name="body.toml",
+    )
+    study = {
+        "scene": "body.toml",
+        "sweep": {"kind": "grid", "parameters": {"initial.rates[0]": ["0.3", "0.4"]}},
+    }
+    path = hostile.scene(study, name="study.toml")
+    o = hostile.run(["sweep", str(path), option, "0"], expect="refused", field=f"{option}:")
+    assert "command-line options" not in o.error_line
+    bad = hostile.scene({**study, "run": {key: 0}}, name="bad.toml")
+    hostile.run(["sweep", str(bad)], expect="refused", field=f"run.{key}:")
+    # The study file itself is invalid: an option does not make it valid.
+    hostile.run(["sweep", str(bad), option, "2"], expect="refused", field=f"run.{key}:")
