@@ -1,5 +1,5 @@
 """A family from another package plugs in through the entry-point group
-``cayley_heyoka.families`` (README, "Layout"), and the core runs it without naming it."""
+``cayley_heyoka.families`` (docs/overview.md, "Layout"), and the core runs it without naming it."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The package's architecture, checked (README, "Layout").
+"""The package's architecture, checked (docs/overview.md, "Layout").
 
 Layers: ``cli`` → ``workflows`` (and the public ``reference`` facade) → the families
 (``rotation``, ``orbit``, ``hamilton``, independent of each other) → ``mechanics`` → ``core``.
