@@ -58,10 +58,10 @@ class ClosedForm:
         The names come from the model the integration would build, so that the file holds
         every output variable and monitor the integrated run would write, and nothing else.
         """
-        from .families import FAMILIES
+        from .structures import model_for
 
         variant = with_precision(self.scene, prec, None)
-        model = FAMILIES[variant.family].build(variant)
+        model = model_for(variant)
         grid = variant.time_grid
         return self._job(variant, model, prec, prec.to_text(grid[:1])[0])
 
@@ -88,12 +88,12 @@ class ClosedForm:
         """The scene's outputs in ``prec`` from the closed form, their certificate, and the
         number of chunks read back from ``store`` (see :func:`.reference.evaluate.evaluate`)."""
         from .evaluation import evaluate
-        from .families import FAMILIES
         from .result import Result, versions
+        from .structures import model_for
 
         wall = time.perf_counter()
         variant = with_precision(self.scene, prec, None)
-        model = FAMILIES[variant.family].build(variant)
+        model = model_for(variant)
         grid = variant.time_grid
         texts = list(prec.to_text(grid))
         job = self._job(variant, model, prec, texts[0])

@@ -34,7 +34,6 @@ from .causes import check_sources, explain_start, start_failure
 from .compiler import compile_model, quiet_heyoka
 from .errors import IntegrationError, Interrupted, SceneError
 from .event_parity import EventParity
-from .families import FAMILIES
 from .model import Handover, Model, call_handler, own_terminal
 from .precision import Precision
 from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, start_values
@@ -43,6 +42,7 @@ from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals, held_signals
 from .span_probe import SpanProbe
 from .step_callbacks import HeldProgress, Progress, ProgressCallback, SignalCallback, ZeroSteps
+from .structures import model_for
 
 __all__ = ["Progress", "Propagation", "model_of", "preflight", "run"]
 
@@ -117,7 +117,7 @@ def model_of(scene: Scene) -> Model:
     held = _MODELS.get(key)
     if held is not None and held[0]() is scene:
         return held[1]
-    model = FAMILIES[scene.family].build(scene)
+    model = model_for(scene)
     if len(_MODELS) >= _MODELS_HELD:
         _MODELS.pop(next(iter(_MODELS)))
     _MODELS[key] = (weakref.ref(scene), model)

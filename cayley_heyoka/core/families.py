@@ -85,6 +85,12 @@ class Family:
     with_formulation
         ``(scene, value) -> dict``: the scene's dictionary in another of its formulations (see
         :meth:`in_formulation`), or None where setting the key is all it takes.
+    structure, numbers
+        Structure once, numbers many (:mod:`.structures`): ``structure(scene) -> str | None``
+        names what ``build`` compiles for the scene, from the scene alone (equal texts: equal
+        expressions, events and handlers; None: not offered for this scene), and
+        ``numbers(scene) -> Numbers`` (:class:`~.model.Numbers`) the values ``build`` gives
+        its state and parameters, without building an expression. Both or neither.
     """
 
     name: str
@@ -104,6 +110,8 @@ class Family:
     formulations: tuple[str, tuple[str, ...]] | None = None
     events: tuple[str, ...] = ()
     with_formulation: Callable[[Any, str], dict[str, Any]] | None = None
+    structure: Callable[[Any], str | None] | None = None
+    numbers: Callable[[Any], Any] | None = None
 
     def formulation_of(self, scene: Any) -> str | None:
         """The formulation ``scene`` is written in (None: the family offers no other)."""
@@ -189,7 +197,17 @@ def _with_user_variables(
 
 
 #: The fields of a family's record that call its package's code.
-_HOOKS = ("parse", "build", "validate", "consistency_check", "closed_form", "plots", "variables")
+_HOOKS = (
+    "parse",
+    "build",
+    "validate",
+    "consistency_check",
+    "closed_form",
+    "plots",
+    "variables",
+    "structure",
+    "numbers",
+)
 
 
 def _guarded(family: Family, path: str) -> Family:

@@ -13,6 +13,7 @@ built in the target precision from its decimal text.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import functools
 import pickle
 from collections.abc import Callable, Mapping, Sequence
@@ -197,6 +198,20 @@ def own_terminal(specs: Sequence[TerminalSpec]) -> list[TerminalSpec]:
     ]
 
 
+@dataclass(frozen=True)
+class Numbers:
+    """What a scene's numbers decide in its model (:meth:`Model.with_numbers`).
+
+    A family that offers ``numbers`` (:class:`~.families.Family`) computes these without
+    building any expression: the initial state, in the order of the system, and the value of
+    every parameter of the model by name, except the literals of the scene's texts (names
+    ``FIELD#k``), which its structure holds.
+    """
+
+    initial_state: Sequence[Any]
+    values: Mapping[str, Any]
+
+
 @dataclass
 class Model:
     """A model family's description of one scene, ready to compile.
@@ -295,10 +310,56 @@ class Model:
         Parameters used only by outputs or monitors may follow them; heyoka refuses a
         parameter vector longer than its equations need.
         """
+        return self._held
+
+    @functools.cached_property
+    def _held(self) -> int:
         exprs = [rhs for _, rhs in self.system]
         exprs += [e.expression for e in self.events] + [e.expression for e in self.terminal]
         used = [int(str(p)[1:]) for p in hy.get_params(exprs)]
         return max(used) + 1 if used else 0
+
+    def with_numbers(self, numbers: Numbers) -> Model:
+        """This model's structure with another scene's numbers: the same expressions, events,
+        handlers and compiled code (its keys are not computed again), ``numbers``' initial
+        state and parameter values.
+
+        Raises
+        ------
+        ValueError
+            ``numbers`` does not fit the structure: another state size, a parameter it does not
+            have, or one it leaves without a value (a fault of the family's ``numbers``).
+        """
+        if len(numbers.initial_state) != len(self.system):
+            raise ValueError(
+                f"{len(numbers.initial_state)} initial values for {len(self.system)} variables"
+            )
+        table = copy.copy(self.pars)
+        table.values = values = list(self.pars.values)
+        names = self.pars.names
+        given = 0
+        for i, name in enumerate(names):
+            if name in numbers.values:
+                values[i] = numbers.values[name]
+                given += 1
+            elif "#" not in name:
+                raise ValueError(f"no value for the parameter {name!r}")
+        if given != len(numbers.values):
+            unknown = sorted(set(numbers.values) - set(names))
+            raise ValueError(f"values for parameters the model does not have: {unknown}")
+        model = dataclasses.replace(
+            self,
+            initial_state=list(numbers.initial_state),
+            pars=table,
+            outputs=dict(self.outputs),
+            monitors=dict(self.monitors),
+            events=list(self.events),
+            terminal=list(self.terminal),
+        )
+        for key in ("code_key", "_held"):  # the structure's, computed at most once
+            if key in self.__dict__:
+                model.__dict__[key] = self.__dict__[key]
+        return model
 
     def size(self) -> int:
         """Bytes of the serialised right-hand sides: a measure of the code to compile."""

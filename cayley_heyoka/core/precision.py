@@ -313,6 +313,15 @@ def dyadic_parts(value: Any) -> tuple[int, int]:
     return (-man if sign else man), int(exp)
 
 
+def two_pi_parts(precision: Precision) -> tuple[int, int]:
+    """(m, e) with ``m 2ᵉ`` = 2π rounded to ``precision``: the value 2π takes in a run, exactly
+    (a turn counted in integers of it is exact)."""
+    import mpmath
+
+    with mpmath.workprec(precision.bits):
+        return dyadic_parts(+(2 * mpmath.pi))
+
+
 def exact_fraction(value: Number) -> Fraction:
     """The exact rational value of a scene number (used for validation without rounding).
 

@@ -30,9 +30,9 @@ import numpy as np
 
 from ..core.consistency import CheckReport, CheckRow
 from ..core.exact import exact
-from ..core.families import FAMILIES
 from ..core.precision import Precision, scene_mpf
 from ..core.scene import Scene
+from ..core.structures import model_for
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,7 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
     # The Jacobians are taken with respect to η(t₀), ϖ(t₀): the canonical state.
     data["hamiltonian"]["formulation"] = "canonical"
     scene = Scene.from_dict(data)
-    model = FAMILIES["hamiltonian"].build(scene)
+    model = model_for(scene)
     prec = scene.integrator.precision
     n = scene.model.degrees
     variational = hy.var_ode_sys(model.system, hy.var_args.vars, order=1)

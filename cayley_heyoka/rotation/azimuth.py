@@ -36,7 +36,7 @@ whose azimuth turns slowest, among those well inside the cone.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -46,7 +46,7 @@ import mpmath
 from ..core.errors import SceneError
 from ..core.exact import exact, exact_array
 from ..core.model import ParTable, TerminalSpec
-from ..core.precision import Precision, dyadic_parts
+from ..core.precision import Precision, two_pi_parts
 from . import attitude as att
 
 Expr = Any  # a heyoka expression
@@ -96,41 +96,18 @@ class Azimuth:
         pars: ParTable,
         precision: Precision,
         u: Sequence[Any],
-        q0: Sequence[Any],
-        gamma0: Sequence[Any],
-        rates0: Sequence[Any],
+        values: Mapping[str, Any],
         state_index: int,
         gamma_index: int,
     ) -> None:
         self.precision = precision
         self.state_index, self.gamma_index = state_index, gamma_index
-        dps = precision.dps + 20
-        with mpmath.workdps(dps):
-            g = _mp(precision, gamma0)
-            k = _chart(g, _mp(precision, rates0))
-            e = [int(i == k) for i in range(3)]
-            R0 = att.quaternion_to_matrix(_mp(precision, q0))
-            uu = _mp(precision, u)
-            s = [sum(R0[i][j] * e[j] for j in range(3)) for i in range(3)]
-            along = _dot(s, uu)
-            h = [s[i] - along * uu[i] for i in range(3)]
-            norm = mpmath.sqrt(_dot(h, h))
-            X = [c / norm for c in h]
-            Y = _cross(uu, X)
-            texts = {
-                "X": [mpmath.nstr(c, dps, strip_zeros=False) for c in X],
-                "Y": [mpmath.nstr(c, dps, strip_zeros=False) for c in Y],
-            }
-        with mpmath.workprec(precision.bits):
-            self._C = dyadic_parts(+(2 * mpmath.pi))  # C: 2π in the run's precision
-        mc, ec = self._C
-        self._step = precision.dyadic(mc, ec - 3)  # C/8, exact
-        one, zero = precision.number(1), precision.number(0)
-        self.e = [pars.add(f"azimuth.e{i + 1}", one if i == k else zero) for i in range(3)]
-        self.bound = pars.add("azimuth.two_pi_scaled", self._step)
-        self.turns = pars.add("azimuth.turns", precision.dyadic(0, 0))
-        self.X = [pars.add(f"azimuth.X[{i}]", texts["X"][i]) for i in range(3)]
-        self.Y = [pars.add(f"azimuth.Y[{i}]", texts["Y"][i]) for i in range(3)]
+        self._C, self._step = _two_pi(precision)
+        self.e = [pars.add(f"azimuth.e{i + 1}", values[f"azimuth.e{i + 1}"]) for i in range(3)]
+        self.bound = pars.add("azimuth.two_pi_scaled", values["azimuth.two_pi_scaled"])
+        self.turns = pars.add("azimuth.turns", values["azimuth.turns"])
+        self.X = [pars.add(f"azimuth.X[{i}]", values[f"azimuth.X[{i}]"]) for i in range(3)]
+        self.Y = [pars.add(f"azimuth.Y[{i}]", values[f"azimuth.Y[{i}]"]) for i in range(3)]
         self.u = [hy.expression(precision.number(c)) for c in u]
         self._kappa2 = pars.constant(Fraction(KAPPA) ** 2)
         self._scale = pars.constant(SCALE)
@@ -230,6 +207,51 @@ class Azimuth:
         value = exact(pars[self._turns_index])
         with mpmath.workprec(self.precision.bits + 64):
             return int(mpmath.nint(value / mpmath.ldexp(mc, ec)))
+
+
+def values(
+    precision: Precision,
+    u: Sequence[Any],
+    q0: Sequence[Any],
+    gamma0: Sequence[Any],
+    rates0: Sequence[Any],
+) -> dict[str, Any]:
+    """The azimuth's parameters at the start: the first chart's axis (the body axis farthest
+    from γ), the horizontal frame X, Y its azimuth is measured in, no turn yet.
+
+    ``u`` is the forces' direction, ``q0`` the initial attitude, ``gamma0`` and ``rates0`` γ
+    and the rates at the start (all in the run's precision).
+    """
+    dps = precision.dps + 20
+    with mpmath.workdps(dps):
+        g = _mp(precision, gamma0)
+        k = _chart(g, _mp(precision, rates0))
+        e = [int(i == k) for i in range(3)]
+        R0 = att.quaternion_to_matrix(_mp(precision, q0))
+        uu = _mp(precision, u)
+        s = [sum(R0[i][j] * e[j] for j in range(3)) for i in range(3)]
+        along = _dot(s, uu)
+        h = [s[i] - along * uu[i] for i in range(3)]
+        norm = mpmath.sqrt(_dot(h, h))
+        X = [c / norm for c in h]
+        Y = _cross(uu, X)
+        texts = {
+            "X": [mpmath.nstr(c, dps, strip_zeros=False) for c in X],
+            "Y": [mpmath.nstr(c, dps, strip_zeros=False) for c in Y],
+        }
+    one, zero = precision.number(1), precision.number(0)
+    out = {f"azimuth.e{i + 1}": one if i == k else zero for i in range(3)}
+    out["azimuth.two_pi_scaled"] = _two_pi(precision)[1]
+    out["azimuth.turns"] = precision.dyadic(0, 0)
+    out |= {f"azimuth.X[{i}]": texts["X"][i] for i in range(3)}
+    out |= {f"azimuth.Y[{i}]": texts["Y"][i] for i in range(3)}
+    return out
+
+
+def _two_pi(precision: Precision) -> tuple[tuple[int, int], Any]:
+    """C = 2π in the run's precision as (mantissa, exponent), and C/8 = C/SCALE (exact)."""
+    mc, ec = C = two_pi_parts(precision)
+    return C, precision.dyadic(mc, ec - 3)
 
 
 def _quaternion_of(R: list[list[Expr]], precision: Precision) -> list[Expr]:

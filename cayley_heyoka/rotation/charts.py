@@ -18,6 +18,7 @@ time — is checked to vanish (``tests/rotation/test_charts.py``).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import mpmath
@@ -42,35 +43,50 @@ class RodriguesAtlas:
     ----------
     pars
         The model's parameter table; the base quaternion and, for invariable-plane events,
-        the angular momentum in base axes are allocated in it.
+        the angular momentum in space and in base axes are allocated in it.
     state_slice
         Where λ, μ, ν sit in the integrator's state.
-    base
-        The initial base quaternion (target precision).
+    values
+        The scene's numbers by parameter name (:meth:`values`).
     """
 
-    def __init__(self, pars: ParTable, state_slice: slice, base: np.ndarray) -> None:
+    def __init__(self, pars: ParTable, state_slice: slice, values: Mapping[str, Any]) -> None:
         self.state_slice = state_slice
-        self.base = base
         self.pars = pars
-        self.base_pars = [pars.add(f"chart.base[{i}]", base[i]) for i in range(4)]
+        self.values = values
+        self.base_pars = [
+            pars.add(f"chart.base[{i}]", values[f"chart.base[{i}]"]) for i in range(4)
+        ]
         self._base_index = pars.index("chart.base[0]")
-        self.momentum_space: list[Any] | None = None
+        self._space_index: int | None = None
 
-    def momentum_in_chart_base(self, momentum_space: np.ndarray) -> list:
-        """Parameters holding the base-frame components of a constant space vector.
+    @staticmethod
+    def values_of(base: Sequence[Any], momentum_space: Sequence[Any] | None) -> dict[str, Any]:
+        """The chart's parameters for a first chart based at ``base`` (a quaternion in the run's
+        precision) and, for invariable-plane events, the body's constant angular momentum in
+        space, ``momentum_space``."""
+        out = {f"chart.base[{i}]": base[i] for i in range(4)}
+        if momentum_space is not None:
+            gb = _momentum_in_base(list(base), list(momentum_space))
+            out |= {f"chart.momentum[{i}]": gb[i] for i in range(3)}
+            out |= {f"chart.momentum_space[{i}]": momentum_space[i] for i in range(3)}
+        return out
 
-        Used by the invariable-plane events of a torque-free body (``momentum_space`` is its
-        angular momentum ``(g, g′, g″)``); kept up to date at every re-basing.
-        """
-        self.momentum_space = momentum_space.tolist()
-        gb = self._momentum_in_base(self.base.tolist())
-        pars = [self.pars.add(f"chart.momentum[{i}]", gb[i]) for i in range(3)]
+    def momentum_in_chart_base(self) -> list:
+        """Parameters holding the base-frame components of the constant angular momentum
+        ``(g, g′, g″)``, for the invariable-plane events of a torque-free body; kept up to date
+        at every re-basing."""
+        values = self.values
+        pars = [
+            self.pars.add(f"chart.momentum[{i}]", values[f"chart.momentum[{i}]"]) for i in range(3)
+        ]
         self._momentum_index = self.pars.index("chart.momentum[0]")
+        # The space vector the base-frame one is recomputed from: a number of the scene, so
+        # held with the others, not by the handler (which every scene of the structure shares).
+        for i in range(3):
+            self.pars.add(f"chart.momentum_space[{i}]", values[f"chart.momentum_space[{i}]"])
+        self._space_index = self.pars.index("chart.momentum_space[0]")
         return pars
-
-    def _momentum_in_base(self, base: list[Any]) -> list[Any]:
-        return att.matvec(att.transpose(att.quaternion_to_matrix(base)), self.momentum_space)
 
     def rebase(self, ta: Any, pars: np.ndarray) -> None:
         """Fold the chart into the base; called with the integrator stopped at the event and
@@ -98,9 +114,13 @@ class RodriguesAtlas:
         zero = 0 * new[1]  # in the state's type
         j = self.state_slice.start
         state[j], state[j + 1], state[j + 2] = zero, zero, zero
-        if self.momentum_space is not None:
-            j = self._momentum_index
-            pars[j : j + 3] = self._momentum_in_base(new)
+        if self._space_index is not None:
+            j, k = self._momentum_index, self._space_index
+            pars[j : j + 3] = _momentum_in_base(new, pars[k : k + 3].tolist())
+
+
+def _momentum_in_base(base: list[Any], momentum_space: list[Any]) -> list[Any]:
+    return att.matvec(att.transpose(att.quaternion_to_matrix(base)), momentum_space)
 
 
 def _sqrt(x: Any) -> Any:

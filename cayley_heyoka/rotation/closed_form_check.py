@@ -381,8 +381,8 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     factor needs no more)."""
     import heyoka as hy
 
-    from ..core.families import FAMILIES
     from ..core.precision import Precision
+    from ..core.structures import model_for
 
     data = with_formulation(scene, "quaternion", more=True)
     data["integrator"] = {"precision": "double"}
@@ -390,7 +390,7 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     # scene's precision but not in double must not refuse the check.
     data["output"] = {**data["output"], "times": [repr(float(scene.time_grid[0]))]}
     twin = Scene.from_dict(data)
-    model = FAMILIES["rotation"].build(twin)
+    model = model_for(twin)
     prec = Precision("double")
     names = [str(v) for v, _ in model.system]
     variational = hy.var_ode_sys(model.system, hy.var_args.vars, order=1)

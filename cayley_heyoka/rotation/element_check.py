@@ -29,6 +29,7 @@ from . import attitude as att
 from . import equations as eq
 from .brackets import cayley_brackets, check_brackets
 from .model import force_function, rodrigues_of_matrix
+from .numbers import numbers
 from .varying_constants import (
     ELEMENTS,
     SAFETY,
@@ -63,7 +64,8 @@ class _Forces:
         rates = list(hy.make_vars("p", "q", "r"))
         names = [[hy.expression(f"R{i + 1}{j + 1}__") for j in range(3)] for i in range(3)]
         R = att.quaternion_to_matrix(quat)
-        W = force_function(body, names, rodrigues_of_matrix(names), inertia, pars)
+        values = numbers(scene).values
+        W = force_function(body, names, rodrigues_of_matrix(names), inertia, pars, values)
         torque = eq.matrix_torque(W, names, R)
         W = hy.subs(W, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
         L = eq.body_momentum(inertia, rates)

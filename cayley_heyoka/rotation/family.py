@@ -29,4 +29,6 @@ FAMILY = Family(
     formulations=("attitude.formulation", ("quaternion", "rodrigues", "poisson")),
     with_formulation=later("cayley_heyoka.rotation.scene", "with_formulation"),
     memoirs=("cayley1843", "cayley1846", "euler1758"),
+    structure=later("cayley_heyoka.rotation.numbers", "structure"),
+    numbers=later("cayley_heyoka.rotation.numbers", "numbers"),
 )

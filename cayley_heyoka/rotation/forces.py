@@ -17,7 +17,7 @@ import heyoka as hy
 from ..core.errors import SceneError
 from ..core.expressions import parse_expression, uses_time
 from ..core.model import ParTable
-from ..core.precision import normalised
+from ..core.precision import Precision, normalised
 from ..core.scene import check_keys, expression_text, number, unit_vector, vector
 from .attitude import Matrix
 
@@ -29,13 +29,20 @@ class ForceContext:
     """What a force function may use: attitude, inertia, time and the parameter table.
 
     ``rodrigues`` are the Cayley–Rodrigues parameters of the whole attitude (space ← body)
-    as expressions of the integrated state, whatever the formulation.
+    as expressions of the integrated state, whatever the formulation; ``values`` the scene's
+    numbers by parameter name (:func:`cayley_heyoka.rotation.numbers.numbers`, which asks each
+    force for its ``values``).
     """
 
     R: Matrix
     rodrigues: Sequence[Expr]
     inertia: Sequence[Expr]
     pars: ParTable
+    values: Mapping[str, Any]
+
+    def add(self, name: str, field: str) -> Expr:
+        """The parameter ``name``, holding the scene's number for it."""
+        return self.pars.add(name, self.values[name], field)
 
 
 @dataclass(frozen=True)
@@ -63,19 +70,23 @@ class HeavyTop:
             unit_vector(table.get("up", [0, 0, 1]), f"{where}.up"),
         )
 
+    def values(self, precision: Precision) -> dict[str, Any]:
+        """The force's parameters (the vertical normalised in ``precision``)."""
+        up = normalised(self.up, precision)
+        return {
+            "heavy_top.weight": self.weight,
+            **{f"heavy_top.center_of_mass[{j}]": self.center_of_mass[j] for j in range(3)},
+            **{f"heavy_top.up[{i}]": up[i] for i in range(3)},
+        }
+
     def potential(self, ctx: ForceContext) -> Expr:
         where = "forces.heavy_top"
-        Mg = ctx.pars.add("heavy_top.weight", self.weight, f"{where}.weight")
+        Mg = ctx.add("heavy_top.weight", f"{where}.weight")
         c = [
-            ctx.pars.add(
-                f"heavy_top.center_of_mass[{j}]",
-                self.center_of_mass[j],
-                f"{where}.center_of_mass[{j}]",
-            )
+            ctx.add(f"heavy_top.center_of_mass[{j}]", f"{where}.center_of_mass[{j}]")
             for j in range(3)
         ]
-        up = normalised(self.up, ctx.pars.precision)
-        u = [ctx.pars.add(f"heavy_top.up[{i}]", up[i], f"{where}.up[{i}]") for i in range(3)]
+        u = [ctx.add(f"heavy_top.up[{i}]", f"{where}.up[{i}]") for i in range(3)]
         height = sum(u[i] * sum(ctx.R[i][j] * c[j] for j in range(3)) for i in range(3))
         return -Mg * height
 
@@ -106,14 +117,21 @@ class GravityGradient:
             unit_vector(table["direction"], f"{where}.direction"),
         )
 
+    def values(self, precision: Precision) -> dict[str, Any]:
+        """The force's parameters (the direction normalised in ``precision``)."""
+        direction = normalised(self.direction, precision)
+        return {
+            "gravity_gradient.gm": self.gm,
+            "gravity_gradient.distance": self.distance,
+            **{f"gravity_gradient.direction[{i}]": u_i for i, u_i in enumerate(direction)},
+        }
+
     def potential(self, ctx: ForceContext) -> Expr:
         where = "forces.gravity_gradient"
-        gm = ctx.pars.add("gravity_gradient.gm", self.gm, f"{where}.gm")
-        d = ctx.pars.add("gravity_gradient.distance", self.distance, f"{where}.distance")
-        direction = normalised(self.direction, ctx.pars.precision)
+        gm = ctx.add("gravity_gradient.gm", f"{where}.gm")
+        d = ctx.add("gravity_gradient.distance", f"{where}.distance")
         u = [
-            ctx.pars.add(f"gravity_gradient.direction[{i}]", u_i, f"{where}.direction[{i}]")
-            for i, u_i in enumerate(direction)
+            ctx.add(f"gravity_gradient.direction[{i}]", f"{where}.direction[{i}]") for i in range(3)
         ]
         ub = [sum(ctx.R[i][j] * u[i] for i in range(3)) for j in range(3)]
         quad = sum(ctx.inertia[j] * ub[j] * ub[j] for j in range(3))
@@ -140,6 +158,10 @@ class Potential:
             raise SceneError(f"{where}.V", "is required")
         V = expression_text(table["V"], f"{where}.V")
         return cls(V, uses_time(V))
+
+    def values(self, precision: Precision) -> dict[str, Any]:
+        """None besides the literals of its text, which the structure holds."""
+        return {}
 
     def potential(self, ctx: ForceContext) -> Expr:
         symbols = {f"R{i + 1}{j + 1}": ctx.R[i][j] for i in range(3) for j in range(3)}

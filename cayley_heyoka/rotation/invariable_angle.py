@@ -24,6 +24,7 @@ in general (dΨ/dt < 0 where h + kr < 0), so the event watches both ends.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from fractions import Fraction
 from typing import Any
 
@@ -31,7 +32,7 @@ import mpmath
 
 from ..core.errors import SceneError
 from ..core.model import ParTable, TerminalSpec
-from ..core.precision import Precision, dyadic_parts, fraction_text
+from ..core.precision import Precision, fraction_text, two_pi_parts
 
 Expr = Any  # a heyoka expression
 #: u = (Ψ − nC)/SCALE: a power of two, so that the scaling is exact.
@@ -66,35 +67,17 @@ class InvariableAngle:
         self,
         pars: ParTable,
         precision: Precision,
-        inertia: tuple[Fraction, Fraction, Fraction],
-        rates: tuple[Fraction, Fraction, Fraction],
+        values: Mapping[str, Any],
         state_index: int,
     ) -> None:
-        A, B, C = inertia
-        p, q, r = rates
-        if p == 0 and q == 0 and r <= 0:
-            raise SceneError(
-                "output.invariable_angle",
-                "Ψ = 2 tan⁻¹ν₀ is undefined here: with p = q = 0 and r ≤ 0 the body's third "
-                "axis points against L (or L = 0), where k + Cr = 0",
-            )
         self.precision = precision
         self.state_index = state_index
         self.n = 0
-        h = A * p * p + B * q * q + C * r * r
-        k2 = (A * p) ** 2 + (B * q) ** 2 + (C * r) ** 2
-        with mpmath.workprec(precision.bits + 64):
-            k = mpmath.sqrt(mpmath.mpf(k2.numerator) / k2.denominator)
-            k_text = mpmath.nstr(k, precision.dps + 20, strip_zeros=False)
-        with mpmath.workprec(precision.bits):
-            two_pi = +(2 * mpmath.pi)  # C: exactly the value 2π takes in the run's precision
-        self._C = dyadic_parts(two_pi)
-        mc, ec = self._C
-        self._step = precision.dyadic(mc, ec - 3)  # C/8, exact
-        self.h = pars.add("psi.h", fraction_text(h, precision))
-        self.k = pars.add("psi.k", k_text)
-        self.bound = pars.add("psi.two_pi_scaled", self._step)
-        self.turns = pars.add("psi.turns", precision.dyadic(0, 0))
+        self._C, self._step = _two_pi(precision)
+        self.h = pars.add("psi.h", values["psi.h"])
+        self.k = pars.add("psi.k", values["psi.k"])
+        self.bound = pars.add("psi.two_pi_scaled", values["psi.two_pi_scaled"])
+        self.turns = pars.add("psi.turns", values["psi.turns"])
         self._scale = pars.constant(SCALE)  # in the run's type: no double node in a quad system
         self._turns_index = pars.index("psi.turns")
 
@@ -129,3 +112,43 @@ class InvariableAngle:
     def resume(self, n: int) -> None:
         """Continue after ``n`` turns (the parameters come back with the snapshot)."""
         self.n = int(n)
+
+
+def values(
+    precision: Precision,
+    inertia: tuple[Fraction, Fraction, Fraction],
+    rates: tuple[Fraction, Fraction, Fraction],
+) -> dict[str, Any]:
+    """The parameters of Ψ for the exact moments ``A, B, C`` and initial rates ``p, q, r``:
+    ``h = 2T``, ``k = |L|``, the turn C/8 and no turn yet.
+
+    Raises
+    ------
+    SceneError
+        ``output.invariable_angle``: Ψ is undefined for these rates.
+    """
+    A, B, C = inertia
+    p, q, r = rates
+    if p == 0 and q == 0 and r <= 0:
+        raise SceneError(
+            "output.invariable_angle",
+            "Ψ = 2 tan⁻¹ν₀ is undefined here: with p = q = 0 and r ≤ 0 the body's third "
+            "axis points against L (or L = 0), where k + Cr = 0",
+        )
+    h = A * p * p + B * q * q + C * r * r
+    k2 = (A * p) ** 2 + (B * q) ** 2 + (C * r) ** 2
+    with mpmath.workprec(precision.bits + 64):
+        k = mpmath.sqrt(mpmath.mpf(k2.numerator) / k2.denominator)
+        k_text = mpmath.nstr(k, precision.dps + 20, strip_zeros=False)
+    return {
+        "psi.h": fraction_text(h, precision),
+        "psi.k": k_text,
+        "psi.two_pi_scaled": _two_pi(precision)[1],
+        "psi.turns": precision.dyadic(0, 0),
+    }
+
+
+def _two_pi(precision: Precision) -> tuple[tuple[int, int], Any]:
+    """C = 2π in the run's precision as (mantissa, exponent), and C/8 = C/SCALE (exact)."""
+    mc, ec = C = two_pi_parts(precision)
+    return C, precision.dyadic(mc, ec - 3)

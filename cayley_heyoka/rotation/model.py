@@ -15,18 +15,17 @@ from collections.abc import Callable
 from typing import Any
 
 import heyoka as hy
-import numpy as np
 
 from ..core.errors import SceneError
 from ..core.expressions import parse_expression
 from ..core.model import EventSpec, Model, ParTable, TerminalSpec
-from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
 from . import attitude as att
 from . import azimuth, invariable_angle, poisson
 from . import equations as eq
-from .charts import RodriguesAtlas, kappa_limit
+from .charts import RodriguesAtlas
 from .forces import ForceContext, HeavyTop, Potential, force_key
+from .numbers import numbers
 from .scene import RigidBody
 
 AXES = ("x1", "y1", "z1")
@@ -42,66 +41,43 @@ MONITORS = (
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated rigid-body scene into a :class:`~cayley_heyoka.core.model.Model`."""
+    """Turn a validated rigid-body scene into a :class:`~cayley_heyoka.core.model.Model`, its
+    numbers from :func:`~cayley_heyoka.rotation.numbers.numbers`."""
     body: RigidBody = scene.model
     prec = scene.integrator.precision
+    given = numbers(scene)
+    values = given.values
     pars = ParTable(prec)
-    inertia = [
-        pars.add(name, body.inertia[i], f"body.inertia[{i}]") for i, name in enumerate("ABC")
-    ]
+    inertia = [pars.add(name, values[name], f"body.inertia[{i}]") for i, name in enumerate("ABC")]
     rates = list(hy.make_vars("p", "q", "r"))
-    q0 = body.initial_quaternion(prec)
-    rates0 = list(prec.array(body.rates))
     outputs: dict[str, Any] = dict(zip("pqr", rates, strict=True))
-
-    momentum = None
-    if body.torque_free:
-        L0 = [m * w for m, w in zip(prec.array(body.inertia), rates0, strict=True)]
-        momentum = np.array(att.matvec(att.quaternion_to_matrix(list(q0)), L0))
     attitude = None
     if body.formulation == "rodrigues":
-        attitude = _rodrigues(body, prec, pars, rates, q0, momentum, inertia)
+        attitude = _rodrigues(body, pars, rates, inertia, values)
     elif body.formulation == "quaternion":
-        attitude = _quaternion(body, pars, rates, q0, momentum, inertia)
+        attitude = _quaternion(body, pars, rates, inertia, values)
     elif body.formulation == "poisson":
-        attitude = _poisson(body, prec, pars, rates, q0, inertia)
+        attitude = _poisson(body, prec, pars, rates, inertia, values)
 
     torque = attitude.torque if attitude else None
-    exact = eq.euler_differences(*(exact_fraction(v) for v in body.inertia))
-    differences = [
-        pars.add(name, fraction_text(d, prec), "body.inertia")
-        for name, d in zip(("B-C", "C-A", "A-B"), exact, strict=True)
-    ]
+    differences = [pars.add(name, values[name], "body.inertia") for name in ("B-C", "C-A", "A-B")]
     system = list(zip(rates, eq.euler_rates(differences, rates, inertia, torque), strict=True))
-    initial = rates0
     terminal = []
     if attitude:
         system += list(zip(attitude.variables, attitude.rhs, strict=True))
-        initial = initial + list(attitude.initial)
         outputs.update(attitude.outputs)
         terminal = list(attitude.terminal)
     if azimuth.wanted(scene.output.options, body.formulation):
         gamma = attitude.variables
-        az = azimuth.Azimuth(pars, prec, attitude.u, q0, attitude.initial, rates0, len(system), 3)
+        az = azimuth.Azimuth(pars, prec, attitude.u, values, len(system), 3)
         s = hy.make_vars("azimuth_reduced")
         system.append((s, az.rhs(gamma, rates)))
-        initial = [*initial, prec.number(0)]
         outputs.update(az.attitude(s, gamma))
         terminal += az.terminal(s, gamma)
     if invariable_angle.wanted(scene.output.options):
-        if not body.torque_free:
-            raise SceneError(
-                "output.invariable_angle",
-                "Ψ is the angle about the invariable line, which only a torque-free body has: "
-                "remove [forces] or the option",
-            )
-        exact = tuple(exact_fraction(v) for v in body.inertia)
-        psi = invariable_angle.InvariableAngle(
-            pars, prec, exact, tuple(exact_fraction(w) for w in body.rates), len(system)
-        )
+        psi = invariable_angle.InvariableAngle(pars, prec, values, len(system))
         u = hy.make_vars("psi_reduced")
         system.append((u, psi.rhs(rates[2], inertia[2])))
-        initial = [*initial, prec.number(0)]
         outputs["psi"] = psi.psi(u)
         terminal.append(psi.terminal(u))
 
@@ -116,6 +92,7 @@ def build_model(scene: Scene) -> Model:
         conserved = tuple(k for k in conserved if k in wanted)
 
     events = _events(scene, body, inertia, rates, attitude, outputs, pars)
+    initial = list(given.initial_state)
     model = Model("rotation", system, initial, pars, outputs, monitors, conserved, events, terminal)
     # tan(θ/2) n is infinite at a half-turn in both formulations: the attitude is fine there.
     model.unbounded = RODRIGUES if "lambda" in outputs else ()
@@ -153,7 +130,6 @@ class _Attitude:
     def __init__(self) -> None:
         self.variables: list[Any] = []
         self.rhs: list[Any] = []
-        self.initial: list[Any] = []
         self.torque: list[Any] | None = None
         self.potential: Any = None
         self.R: list[list[Any]] = []
@@ -170,18 +146,11 @@ class _Attitude:
         self.u: Any = None  # the poisson formulation's space direction
 
 
-def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
+def _rodrigues(body, pars, rates, inertia, values) -> _Attitude:
     a = _Attitude()
     rho = list(hy.make_vars("lambda", "mu", "nu"))
-    kmax_text = kappa_limit(body.max_chart_angle, prec)
-    # Start in the identity chart when the initial attitude fits in it, so that a short run
-    # integrates Cayley's own parameters; otherwise start from a chart based at the attitude.
-    fits = q0[0] * q0[0] * prec.number(kmax_text) > 1
-    one, zero = prec.number(1), prec.number(0)
-    base = np.array([one, zero, zero, zero]) if fits else q0
-    rho0 = att.quaternion_to_rodrigues(list(q0)) if fits else [zero] * 3
-    atlas = RodriguesAtlas(pars, slice(3, 6), base)
-    kmax = pars.add("chart.kappa_max", kmax_text)
+    atlas = RodriguesAtlas(pars, slice(3, 6), values)
+    kmax = pars.add("chart.kappa_max", values["chart.kappa_max"])
 
     qb = atlas.base_pars
     # The base is normalised at each fold, to within a rounding: R(qb) is |qb|² times its
@@ -193,26 +162,26 @@ def _rodrigues(body, prec, pars, rates, q0, momentum, inertia) -> _Attitude:
     rho_total = [q_total[i] / q_total[0] for i in (1, 2, 3)]
     norm = hy.sqrt(att.kappa(rho))
 
-    a.variables, a.initial, a.R = rho, rho0, R
+    a.variables, a.R = rho, R
     a.rhs = eq.rodrigues_kinematics(rho, rates)
     if body.forces:
-        a.potential = force_function(body, R, rho_total, inertia, pars)
+        a.potential = force_function(body, R, rho_total, inertia, pars, values)
         a.torque = eq.cayley_torque(a.potential, rho)
     a.outputs = dict(zip(("lambda", "mu", "nu"), rho_total, strict=True))
     a.outputs.update(zip(("qw", "qx", "qy", "qz"), [c / norm for c in q_total], strict=True))
     a.terminal = [TerminalSpec(att.kappa(rho) - kmax, 1, atlas.rebase, "rebasings")]
-    if momentum is not None:
+    if body.torque_free:
 
         def plane_events():
             kR = att.rodrigues_kappa_matrix(rho)
-            gb = atlas.momentum_in_chart_base(momentum)
+            gb = atlas.momentum_in_chart_base()
             return [sum(kR[i][j] * gb[i] for i in range(3)) for j in range(3)]
 
         a.plane_events = plane_events
     return a
 
 
-def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
+def _quaternion(body, pars, rates, inertia, values) -> _Attitude:
     a = _Attitude()
     quat = list(hy.make_vars("qw", "qx", "qy", "qz"))
     # The norm of q is a gauge (q and cq are one attitude; the kinematics is linear in q), but
@@ -220,11 +189,11 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     # L in space and the forces: everything physical reads the normalised attitude.
     frame = att.quaternion_to_matrix(quat)
     R, norm2 = att.quaternion_rotation(quat)
-    a.variables, a.initial, a.R, a.frame = quat, list(q0), R, frame
+    a.variables, a.R, a.frame = quat, R, frame
     a.rhs = eq.quaternion_kinematics(quat, rates)
     if body.forces:
         names = [[hy.expression(f"R{i + 1}{j + 1}__") for j in range(3)] for i in range(3)]
-        V = force_function(body, names, rodrigues_of_matrix(names), inertia, pars)
+        V = force_function(body, names, rodrigues_of_matrix(names), inertia, pars, values)
         pars.bind({str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
         a.torque = eq.matrix_torque(V, names, R, scaled=(frame, norm2))
         a.potential = hy.subs(V, {str(names[i][j]): R[i][j] for i in range(3) for j in range(3)})
@@ -233,36 +202,38 @@ def _quaternion(body, pars, rates, q0, momentum, inertia) -> _Attitude:
     )
     norm = hy.sqrt(norm2)
     a.outputs.update(zip(("qw", "qx", "qy", "qz"), [c / norm for c in quat], strict=True))
-    if momentum is not None:
+    if body.torque_free:
 
         def plane_events():
             # Scaling by |q|² > 0 moves no root: the events need no division.
-            g = [pars.add(f"momentum_space[{i}]", momentum[i]) for i in range(3)]
+            g = [pars.add(f"momentum_space[{i}]", values[f"momentum_space[{i}]"]) for i in range(3)]
             return [sum(frame[i][j] * g[i] for i in range(3)) for j in range(3)]
 
         a.plane_events = plane_events
     return a
 
 
-def _poisson(body, prec, pars, rates, q0, inertia) -> _Attitude:
+def _poisson(body, prec, pars, rates, inertia, values) -> _Attitude:
     """The rates and γ = Rᵀu (:mod:`.poisson`): no attitude beyond the forces' direction."""
     a = _Attitude()
     u = poisson.direction(body.forces, prec)
     gamma = list(hy.make_vars(*poisson.GAMMA))
-    a.variables, a.initial = gamma, poisson.initial_direction(q0, u, prec)
+    a.variables = gamma
     a.rhs = poisson.kinematics(gamma, rates)
     zero = hy.expression(prec.number(0))
-    a.potential = force_function(body, poisson.frame(u, gamma, prec), [zero] * 3, inertia, pars)
+    frame = poisson.frame(u, gamma, prec)
+    a.potential = force_function(body, frame, [zero] * 3, inertia, pars, values)
     a.torque = poisson.torque(a.potential, gamma)
     a.outputs = dict(zip(poisson.GAMMA, gamma, strict=True))
     a.direction, a.u = gamma, u
     return a
 
 
-def force_function(body: RigidBody, R, rho_total, inertia, pars: ParTable) -> hy.expression:
+def force_function(body: RigidBody, R, rho_total, inertia, pars: ParTable, values) -> hy.expression:
     """The scene's force function V (the sum of its forces) on the attitude matrix ``R`` and
-    the Cayley–Rodrigues parameters ``rho_total`` of the whole attitude."""
-    ctx = ForceContext(R, rho_total, inertia, pars)
+    the Cayley–Rodrigues parameters ``rho_total`` of the whole attitude, its parameters holding
+    ``values``."""
+    ctx = ForceContext(R, rho_total, inertia, pars, values)
     terms = []
     for force in body.forces:
         term = force.potential(ctx)
@@ -321,12 +292,7 @@ def _events(scene: Scene, body, inertia, rates, attitude, outputs, pars) -> list
     events: list[EventSpec] = []
     for name in scene.output.events:
         if name == "invariable_plane":
-            if all(exact_fraction(w) == 0 for w in scene.model.rates):
-                raise SceneError(
-                    "output.events",
-                    "invariable_plane is undefined where the angular momentum L is 0, and "
-                    "initial.rates are all zero: remove the event or give the body a rate",
-                )
+            # (A body at rest has no invariable plane: refused by numbers().)
             if attitude is not None and attitude.plane_events is not None:
                 exprs = attitude.plane_events()
             else:

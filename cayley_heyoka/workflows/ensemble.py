@@ -61,10 +61,10 @@ import numpy as np
 
 from ..core import compiler, lanes
 from ..core.errors import OptionError, SceneError
-from ..core.families import FAMILIES
 from ..core.model import Model
 from ..core.precision import Number, Precision, number_argument
 from ..core.scene import IntegratorOptions, Scene, require_scene
+from ..core.structures import model_for
 
 MODES = ("batch", "threads", "serial")
 
@@ -147,7 +147,7 @@ def ensemble_state(scene: Scene) -> tuple[tuple[str, ...], np.ndarray]:
         quaternion attitude; ``x, y, z, vx, vy, vz`` for a Cartesian orbit) and their values
         at the start time.
     """
-    model = FAMILIES[scene.family].build(scene)
+    model = model_for(scene)
     prec = scene.integrator.precision
     return tuple(model.state_names), prec.array(model.initial_state)
 
@@ -218,7 +218,7 @@ def propagate_ensemble(
             f"an ensemble records no events, but the scene lists output.events = "
             f"{list(scene.output.events)}: remove them (run() a member to record its events)"
         )
-    model = FAMILIES[scene.family].build(scene)
+    model = model_for(scene)
     if model.terminal:
         why = "; ".join(
             _TERMINAL_HINTS.get(t.counter, f"the terminal event {t.counter!r}")

@@ -93,7 +93,7 @@ def prepare_members(
 ) -> Prepared:
     """The first half of :func:`propagate_members`: each member's scene and model, grouped by
     compiled structure (Python work, run while the previous chunk integrates)."""
-    from ..core.families import FAMILIES
+    from ..core.structures import model_for
 
     prec = study.precision
     n = len(members)
@@ -110,7 +110,7 @@ def prepare_members(
     for row, (index, values) in enumerate(members):
         try:
             scene = scenes[row] if scenes is not None else study.member_scene(index, values)
-            model = FAMILIES[scene.family].build(scene)
+            model = model_for(scene)
         except Exception as exc:  # one member's bad numbers must not end the sweep
             part.message[row] = reason(exc)
             continue

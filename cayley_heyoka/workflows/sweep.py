@@ -50,11 +50,11 @@ Progress = Callable[[int, int], None]
 
 def layout_of(study: Study) -> Layout:
     """The file's columns, from the first member's model."""
-    from ..core.families import FAMILIES
     from ..core.scene import check_units
+    from ..core.structures import model_for
 
     scene = study.member_scene(0, study.members()[0])
-    model = FAMILIES[scene.family].build(scene)
+    model = model_for(scene)
     check_units(scene, [*model.outputs, *model.monitors])
     events = tuple(dict.fromkeys(e.name for e in model.events))
     grid = scene.time_grid

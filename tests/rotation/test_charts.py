@@ -25,7 +25,7 @@ EPS = 2.0**-52
 def fold(base: np.ndarray, rho: list, precision: Precision) -> np.ndarray:
     """The new base after one re-basing of the chart ``rho`` on ``base``."""
     table = ParTable()
-    atlas = RodriguesAtlas(table, slice(3, 6), base)
+    atlas = RodriguesAtlas(table, slice(3, 6), RodriguesAtlas.values_of(list(base), None))
     pars = np.array(table.values)
     ta = SimpleNamespace(state=precision.array([0, 0, 0, *rho]))
     atlas.rebase(ta, pars)

@@ -26,13 +26,14 @@ def torques(force, rho_value):
     pars = ParTable()
     inertia = [pars.add(n, v) for n, v in zip("ABC", INERTIA, strict=True)]
     R = att.rodrigues_to_matrix(rho)
-    V = force.potential(ForceContext(R, rho, inertia, pars))
+    values = force.values(pars.precision)
+    V = force.potential(ForceContext(R, rho, inertia, pars, values))
     cayley = eq.cayley_torque(V, rho)
 
     names = [[hy.expression(f"R{i}{j}__") for j in range(3)] for i in range(3)]
     pars2 = ParTable()
     inertia2 = [pars2.add(n, v) for n, v in zip("ABC", INERTIA, strict=True)]
-    V2 = force.potential(ForceContext(names, rho, inertia2, pars2))
+    V2 = force.potential(ForceContext(names, rho, inertia2, pars2, values))
     gradient = eq.matrix_torque(V2, names, R)
 
     f = hy.cfunc(cayley + gradient, rho)
