@@ -21,3 +21,15 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
     if _TALLY:
         counts = ", ".join(f"{k} {v}" for k, v in sorted(_TALLY.items()))
         terminalreporter.write_line(f"hostile-input cases: {counts}")
+
+
+@pytest.fixture(autouse=True)
+def _structures_of_this_test_only():
+    """Each test builds its own model structures (cayley_heyoka.core.structures): a structure
+    built while a test patched a family's function (a handler made to fail, an equation made
+    wrong) would otherwise be filled for the scenes of later tests."""
+    from cayley_heyoka.core import structures
+
+    structures.clear()
+    yield
+    structures.clear()

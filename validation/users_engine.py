@@ -3,12 +3,13 @@
 Rows (issue 16's table, each ours ÷ its floor, timed interleaved in one process):
 
 * ``run()`` of a short span (about 10 steps) of a bundled scene without events, its integrator
-  already compiled — against heyoka alone doing the same work: a copy of the compiled
-  integrator and ``propagate_until`` (the bundled free body in Rodrigues parameters, and in a
-  quaternion);
+  already compiled — against heyoka alone doing the same work with the integrator kept: a
+  reset of its time and state and ``propagate_until`` (the bundled free body in Rodrigues
+  parameters, and in a quaternion);
 * ``run_sweep`` of a conservation study of free bodies (the bundled random study, its member
   count raised) — against a hand-written heyoka batch integrator of the same equations looping
-  over the members on one thread, recording the same output times;
+  over the members, recording the same output times, on as many threads as the sweep's
+  workers: a short span (t = 0…100) on one worker, and t = 0…1000 on every core;
 * ``run_sweep`` of members with terminal events (Cayley's orbit, a Rodrigues chart), batched in
   lanes with their handlers — against ``run()`` of each member on every core, the path such
   sweeps took before (no hand-written floor: the handlers are the point).
@@ -20,6 +21,8 @@ from __future__ import annotations
 
 import argparse
 import copy
+import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import heyoka as hy
@@ -56,8 +59,9 @@ def short_runs(quick: bool) -> list[Row]:
         x0 = np.array(prop.model.initial_state, dtype=float)
         end = float(scene.output.time_grid(scene.integrator.precision)[-1])
 
-        def floor(template=template, x0=x0, end=end) -> None:
-            ta = copy.deepcopy(template)
+        kept = copy.deepcopy(template)
+
+        def floor(ta=kept, x0=x0, end=end) -> None:
             ta.time = 0.0
             ta.state[:] = x0
             ta.propagate_until(end)
@@ -70,7 +74,7 @@ def short_runs(quick: bool) -> list[Row]:
                 f"`run()` of a short span, bundled free body ({formulation}), compiled",
                 ratios,
                 1.5,
-                "copy of the compiled integrator + `propagate_until`",
+                "the kept integrator: state reset + `propagate_until`",
                 f"{result.counters['steps']} steps; ours {ours * 1e6:.0f} µs, "
                 f"floor {raw * 1e6:.0f} µs",
             )
@@ -98,26 +102,34 @@ def _hand_written_batch(width: int) -> hy.taylor_adaptive_batch:
 
 
 def sweep(quick: bool) -> list[Row]:
+    rows = []
+    cores = os.cpu_count() or 1
+    for stop, workers, target in (("100", 1, 1.5), ("1000", cores, 1.2)):
+        rows.append(_sweep_row(quick, stop, workers, target))
+    return rows
+
+
+def _sweep_row(quick: bool, stop: str, workers: int, target: float) -> Row:
     base = load_study(EXAMPLES / "studies" / "free_body_random.toml").to_dict()
     base.pop("scene_file", None)
     members = 200 if quick else 2000
-    data = {**base, "sweep": {**base["sweep"], "count": members}}
+    base["scene"]["output"] = {"times": {"start": "0", "stop": stop, "count": 101}}
+    data = {**base, "sweep": {**base["sweep"], "count": members}, "run": {"workers": workers}}
     study = Study.from_dict(data)
     scene0 = study.member_scene(0, study.members()[0])
-    grid = scene0.output.time_grid(scene0.integrator.precision)
+    grid = scene0.time_grid
     values = study.members()
     inertia = np.array([float(x) for x in scene0.source["body"]["inertia"]])
     rates = np.array([[float(x) for x in v] for v in values])
     width = hy.recommended_simd_size()
     template = _hand_written_batch(width)
     run_sweep(Study.from_dict({**data, "sweep": {**data["sweep"], "count": 16}}))  # compile
+    blocks = list(range(0, members, width))
 
-    def floor() -> int:
-        ta = copy.deepcopy(template)
-        ta.pars[:] = inertia[:, None]
+    def share(ta, starts) -> int:
         steps = 0
         table = np.repeat(grid[:, None], width, axis=1)
-        for lo in range(0, members, width):
+        for lo in starts:
             block = rates[lo : lo + width]
             block = np.vstack([block, np.repeat(block[-1:], width - len(block), axis=0)])
             ta.set_time(0.0)
@@ -128,28 +140,37 @@ def sweep(quick: bool) -> list[Row]:
             steps += sum(res[3] for res in ta.propagate_res[: min(width, members - lo)])
         return steps
 
+    def floor() -> int:
+        # One integrator per thread, each a share of the blocks (heyoka releases the GIL).
+        integrators = [copy.deepcopy(template) for _ in range(workers)]
+        for ta in integrators:
+            ta.pars[:] = inertia[:, None]
+        if workers == 1:
+            return share(integrators[0], blocks)
+        with ThreadPoolExecutor(workers) as pool:
+            parts = pool.map(share, integrators, [blocks[k::workers] for k in range(workers)])
+            return sum(parts)
+
     result = run_sweep(study)
     ratios, ours, raw = interleaved(
         lambda: run_sweep(study), floor, repeats=3 if quick else 5, inner=1
     )
     steps = int(result.steps.sum())
-    return [
-        Row(
-            f"`run_sweep`: {members} free bodies (quaternion, t = 0…1000, 101 outputs), every core",
-            ratios,
-            2.0,
-            f"hand-written `taylor_adaptive_batch` loop (width {width}), one thread",
-            f"{steps / members:.0f} steps a member; ours {steps / ours / 1e6:.2f} M "
-            f"body-steps/s, floor {floor() / raw / 1e6:.2f} M; paths "
-            f"{result.metadata['paths']}",
-        )
-    ]
+    threads = "one thread" if workers == 1 else f"{workers} threads"
+    who = "1 worker" if workers == 1 else "every core"
+    return Row(
+        f"`run_sweep`: {members} free bodies (quaternion, t = 0…{stop}, 101 outputs), {who}",
+        ratios,
+        target,
+        f"hand-written `taylor_adaptive_batch` loop (width {width}), {threads}",
+        f"{steps / members:.0f} steps a member; ours {steps / ours / 1e6:.2f} M "
+        f"body-steps/s, floor {floor() / raw / 1e6:.2f} M; paths "
+        f"{result.metadata['paths']}",
+    )
 
 
 def terminal_sweep(quick: bool) -> list[Row]:
     """Members whose terminal events act between steps, in lanes against run() per member."""
-    from concurrent.futures import ThreadPoolExecutor
-
     cases = {
         "Cayley's orbit (ρ's revolutions), J2": {
             "orbit": {

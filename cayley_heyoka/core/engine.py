@@ -367,9 +367,10 @@ class Propagation:
             self._rows, self._rows_pars = grid[i : i + outputs], []
             self._next_row = grid[i] if outputs else None
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
-            outcome, out = res[0], res[-1]
-            taken = self.counters["steps"] + res[3]
-            zero = outcomes.zero_step(outcome, res[1]) or self._zero.seen
+            ended, out = outcomes.Ended.of(res), res[-1]
+            outcome = ended.outcome
+            taken = self.counters["steps"] + ended.steps
+            zero = ended.zero_step or self._zero.seen
             stuck = zero and not self._signals.received
             cut = (
                 probe is not None
@@ -386,7 +387,7 @@ class Propagation:
             if isinstance(callback, HeldProgress):
                 callback.release()
             out = out[int(resume) : int(resume) + outputs]
-            self.counters["steps"] += res[3]
+            self.counters["steps"] += ended.steps
             states.append(out)
             given = self._rows_pars[: len(out)]
             pars_rows += given + [self._pars.copy() for _ in range(len(out) - len(given))]

@@ -100,7 +100,7 @@ class _Everything:
     def block(self, block, out, res, recorded, pars, end, members) -> None:
         for j, index in enumerate(block):
             events = recorded(j)
-            counters, own = {"steps": int(res[j][3])}, pars[index]
+            counters, own = {"steps": outcomes.Ended.of(res[j]).steps}, pars[index]
             if members is not None:  # terminal handlers: their tallies, parameters per row
                 counters, own = members[j].counters, np.concatenate(members[j].pars_rows)
             self.results[index] = LaneResult(
@@ -134,7 +134,7 @@ class _Finals:
     def block(self, block, out, res, recorded, pars, end, members) -> None:
         n = len(block)
         self.finals.states[block[0] : block[0] + n] = out[-1, :, :n].T
-        self.finals.steps[block[0] : block[0] + n] = [r[3] for r in res[:n]]
+        self.finals.steps[block[0] : block[0] + n] = [outcomes.Ended.of(r).steps for r in res[:n]]
 
     def value(self) -> Finals:
         return self.finals
@@ -496,11 +496,12 @@ class _Lanes:
             return True  # a cancel may have poisoned the call: nothing of it is recorded
         end, times = grid[-1], ta.time
         done = hy.taylor_outcome.time_limit
-        if any(res[j][0] != done or times[j] != end for j in range(len(block))):
+        ended = [outcomes.Ended.of(r) for r in res[: len(block)]]
+        if any(e.outcome != done or times[j] != end for j, e in enumerate(ended)):
             return False
         if members is not None:
             for j, m in enumerate(members):
-                m.counters["steps"] = int(res[j][3])
+                m.counters["steps"] = ended[j].steps
                 self._keep(m, out[:, :, j].copy())
                 self._gather(j, m)
                 if m.parity is not None:
@@ -601,7 +602,7 @@ class _Lanes:
         if self._cancelled():
             return
         out = ta.propagate_grid(table, max_steps=left, **self.limit)[-1]
-        outcomes = ta.propagate_res
+        results = ta.propagate_res
         if self._cancelled():
             return  # a cancel may have poisoned the call: its members stay unfinished
         for rec in self.recorders:
@@ -609,16 +610,18 @@ class _Lanes:
                 if self.lanes[j] is None:
                     rec.clear(j)
         for j in busy:
-            self._collect(j, columns[j], length, out[:, :, j], outcomes[j])
+            self._collect(j, columns[j], length, out[:, :, j], outcomes.Ended.of(results[j]))
 
-    def _collect(self, j: int, column: tuple[np.ndarray, int], length: int, out, res) -> None:
+    def _collect(
+        self, j: int, column: tuple[np.ndarray, int], length: int, out, ended: outcomes.Ended
+    ) -> None:
         """Record lane ``j``'s rows of the call and act on its outcome, as
         :meth:`cayley_heyoka.core.engine.Propagation._propagate` does on a scalar integrator."""
         ta, m = self.ta, self.lanes[j]
         if m is None:
             raise RuntimeError(f"lane {j} has no member to collect")
         points, lead = column
-        outcome, steps = res[0], int(res[3])
+        outcome, steps = ended.outcome, ended.steps
         t = ta.time[j]
         # Rows of the table holding this lane's output times (after any inserted points).
         extra = length - len(points)
@@ -640,7 +643,7 @@ class _Lanes:
         code = int(outcome)
         if m.status != 0 or (t == points[-1] and m.done == len(self.grid)):
             pass  # stopped by its handler (status set), or every output reached
-        elif outcomes.zero_step(outcome, res[1]):
+        elif ended.zero_step:
             m.status, m.message = -1, outcomes.zero_step_message(self.model, t)
         elif m.steps >= self.budget:
             self._out_of_steps(m, t)

@@ -12,11 +12,46 @@ zero, which it reports as ``step_limit`` whatever its step count (:func:`zero_st
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import heyoka as hy
 
 from .model import Model
+
+
+class Ended(NamedTuple):
+    """How one heyoka call ended, by name: its ``taylor_outcome``, its smallest and largest
+    step, its step count (the first four items of ``propagate_until``'s, ``propagate_grid``'s
+    and each lane's ``propagate_res`` tuple)."""
+
+    outcome: Any
+    min_h: Any
+    max_h: Any
+    steps: int
+
+    @classmethod
+    def of(cls, res: Any) -> Ended:
+        """The first four items of heyoka's result ``res``."""
+        return cls(res[0], res[1], res[2], int(res[3]))
+
+    @property
+    def zero_step(self) -> bool:
+        """The call ended on a step of size zero (:func:`zero_step`)."""
+        return zero_step(self.outcome, self.min_h)
+
+
+class EnsembleRun(NamedTuple):
+    """One member of ``heyoka.ensemble_propagate_grid``, by name: the member's integrator,
+    how its call ended, and the states on the grid."""
+
+    integrator: Any
+    ended: Ended
+    states: Any
+
+    @classmethod
+    def of(cls, res: Any) -> EnsembleRun:
+        return cls(res[0], Ended.of(res[1:5]), res[-1])
+
 
 #: What every message of a run that stopped early ends with.
 KEPT = "results kept up to there"

@@ -647,16 +647,18 @@ def normalised(values: Iterable[Number], precision: Precision) -> tuple[Number, 
 
 
 def unit_length(values: Iterable[Number], tolerance: Fraction) -> tuple[bool, str]:
-    """Whether ``|v|`` is within ``tolerance`` of 1, decided exactly, and ``|v|`` as short text.
+    """Whether ``|v|`` is within ``tolerance`` of 1, decided exactly, and ``|v|`` as short text
+    (for the refusal of one that is not; empty for one that is).
 
     ``float()`` of the squared norm would overflow for components beyond 1e154.
     """
     import mpmath
 
     norm2 = sum(exact_fraction(v) ** 2 for v in values)
-    inside = (1 - tolerance) ** 2 <= norm2 <= (1 + tolerance) ** 2
+    if (1 - tolerance) ** 2 <= norm2 <= (1 + tolerance) ** 2:
+        return True, ""  # a scene's every member checks its attitude: no root for nothing
     with mpmath.workdps(25):
-        return inside, mpmath.nstr(mpmath.sqrt(mpmath.mpf(norm2.numerator) / norm2.denominator), 17)
+        return False, mpmath.nstr(mpmath.sqrt(mpmath.mpf(norm2.numerator) / norm2.denominator), 17)
 
 
 def fraction_text(value: Fraction, precision: Precision) -> str:

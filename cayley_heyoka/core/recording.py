@@ -118,10 +118,15 @@ def first_nonfinite(
     """The first row at which an output or monitor of ``values`` is not finite, and the
     message of the stop there; None if every value is finite."""
     first = None
-    for name, value in values.items():
-        if name in model.unbounded:
-            # Infinite (or 0/0) at a half-turn, rightly; a state gone NaN shows in the others.
-            continue
+    # Infinite (or 0/0) at a half-turn, rightly, are the unbounded outputs; a state gone NaN
+    # shows in the others.
+    suspects = [
+        name
+        for name, value in values.items()
+        if name not in model.unbounded and not np.isfinite(value).all()
+    ]
+    for name in suspects:
+        value = values[name]
         rows = np.asarray(value).reshape(len(value), -1)
         bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
         if len(bad) and (first is None or bad[0] < first[0]):
@@ -161,22 +166,59 @@ def evaluate_outputs(
     dict
         Each output and monitor by name: shape ``(n,)``, or ``(n, k)`` for a k-vector monitor.
     """
+    return evaluate_blocks(compiled, model, [(state, pars, times)], prec)[0]
+
+
+def evaluate_blocks(
+    compiled: Compiled,
+    model: Model,
+    blocks: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]],
+    prec: Precision,
+) -> list[dict[str, np.ndarray]]:
+    """:func:`evaluate_outputs` of several runs' ``(state, pars, times)`` at once (the members
+    of a sweep), in one call of the compiled evaluator.
+
+    The evaluator works SIMD lanes at a time, and some functions iterate until every lane of a
+    batch has converged (Kepler's equation): a row's bits depend on the rows beside it. Each
+    block is therefore cut into whole batches of its own rows (the last padded with copies of
+    its last row), so that a run's outputs are the same bits alone or beside others.
+    """
     evaluator = compiled.evaluator
-    n = len(state)
-    if n == 0:
+    width = max(1, int(getattr(evaluator, "batch_size", 1)))
+    sizes = [len(state) for state, _, _ in blocks]
+    padded = [-(-n // width) * width for n in sizes]
+    total = sum(padded)
+    if total == 0:
         rows = np.empty((len(flat_outputs(model)), 0))
     else:
-        kwargs: dict[str, Any] = {"time": np.ascontiguousarray(times)}
+        # Stacked in the precision's own arrays (a concatenation keeps heyoka's dtypes).
+        def pad(a: np.ndarray, n: int, to: int) -> np.ndarray:
+            return a if to == n else np.concatenate([a, np.repeat(a[-1:], to - n, axis=0)])
+
+        def stack(i: int) -> np.ndarray:
+            used = [(b[i], n, to) for b, n, to in zip(blocks, sizes, padded, strict=True) if n]
+            if len(used) == 1 and used[0][1] == used[0][2]:
+                return np.asarray(used[0][0])  # one run, whole batches: nothing to copy
+            return np.concatenate([pad(np.asarray(a), n, to) for a, n, to in used])
+
+        state = stack(0)
+        kwargs: dict[str, Any] = {"time": np.ascontiguousarray(stack(2))}
         if evaluator.nparams:
-            kwargs["pars"] = np.ascontiguousarray(pars[:, : evaluator.nparams].T)
+            kwargs["pars"] = np.ascontiguousarray(stack(1)[:, : evaluator.nparams].T)
         rows = evaluator(np.ascontiguousarray(state.T), **kwargs)
-    out: dict[str, np.ndarray] = {}
-    k = 0
-    for name, value in list(model.outputs.items()) + list(model.monitors.items()):
-        width = len(value) if isinstance(value, list) else 1
-        block = rows[k : k + width]
-        out[name] = block.T.copy() if isinstance(value, list) else block[0].copy()
-        k += width
+    out: list[dict[str, np.ndarray]] = []
+    lo = 0
+    for n, to in zip(sizes, padded, strict=True):
+        part = rows[:, lo : lo + n]
+        lo += to
+        values: dict[str, np.ndarray] = {}
+        k = 0
+        for name, value in list(model.outputs.items()) + list(model.monitors.items()):
+            width_k = len(value) if isinstance(value, list) else 1
+            block = part[k : k + width_k]
+            values[name] = block.T.copy() if isinstance(value, list) else block[0].copy()
+            k += width_k
+        out.append(values)
     return out
 
 

@@ -24,6 +24,19 @@ from .names import COMPONENTS, component_dim, layout_holder, name_problem
 from .precision import Precision
 
 
+def relative_drift(m: np.ndarray, vector: bool) -> np.ndarray:
+    """Drifts of monitored values from their first: ``m`` is ``(members, times)``, or
+    ``(members, times, k)`` for a ``vector`` of k components; each member's change divided by
+    its initial value's magnitude (a vector's norm), or the change itself where that is zero
+    (:meth:`Result.drift` of one member, the drifts of a sweep's members at once)."""
+    if m.shape[1] == 0:
+        return m
+    m0 = m[:, :1]
+    scale = np.sqrt(np.sum(m0 * m0, axis=-1, keepdims=True)) if vector else abs(m0)
+    one = scale * 0 + 1  # in the values' own type (real128, real)
+    return (m - m0) / np.where(scale == 0, one, scale)
+
+
 @dataclass
 class EventLog:
     """Occurrences of one event.
@@ -148,11 +161,7 @@ class Result:
         initial vector's norm. Where the initial value is zero the change itself is returned.
         """
         m = self.monitors[name]
-        if len(m) == 0:
-            return m
-        m0 = m[0]
-        scale = np.sqrt(np.sum(m0 * m0)) if m.ndim > 1 else abs(m0)
-        return (m - m0) / scale if scale != 0 else m - m0
+        return relative_drift(m[None], vector=m.ndim > 1)[0]
 
     def final_drifts(self) -> dict[str, float]:
         """Relative drift at the last output time of each conserved monitor (largest component)."""

@@ -766,6 +766,13 @@ def plain_copy(data: Any) -> Any:
     real128, mpmath) becomes the int, float or text with its exact value that the scene was
     built from (:func:`~cayley_heyoka.core.precision.as_number`), so that the copy gives the
     same scene again."""
+    kind = type(data)
+    if kind is str or kind is float or kind is int or kind is bool or data is None:
+        return data  # the common leaves first: a sweep copies every member's scene
+    if kind is dict:
+        return {str(k): plain_copy(v) for k, v in data.items()}
+    if kind is list:
+        return [plain_copy(v) for v in data]
     if isinstance(data, Mapping):
         return {str(k): plain_copy(v) for k, v in data.items()}
     if isinstance(data, list | tuple):

@@ -54,6 +54,11 @@ class SignalPolicy:
         self._wakeup: int | None = None
         self._ending = threading.Lock()
         self._again: list[threading.Timer] = []
+        #: Signals a Python-level handler of ours has taken (this policy's, a propagation's, a
+        #: write's), and the signals the watching thread has read from the wakeup pipe: one it
+        #: reads after a handler took it is not its to act on.
+        self.handled = 0
+        self._arrived = 0
         # The handler as installed, so that the watching thread can tell it from another
         # one installed over it (a propagation's, a write's): those decide for themselves.
         self._handler = self._handle
@@ -100,6 +105,7 @@ class SignalPolicy:
         self.phase = "done"
 
     def _handle(self, signum: int, frame: Any) -> None:
+        self.handled += 1
         if self.phase != "work":
             self._end(signum)
         if _importing(frame):
@@ -115,13 +121,19 @@ class SignalPolicy:
     def _watch(self, fd: int) -> None:
         # Python's C-level handler writes each signal's number here as it arrives, while the
         # main thread may not run Python code for a long time (an import's C part, LLVM).
+        # A byte it reads late (the machine busy) may stand for a signal a handler took while
+        # the command worked (a write held it, and re-raised it as KeyboardInterrupt): acting
+        # on it once the work is done would end the process at once, cutting the report short.
         while data := os.read(fd, 512):
             for signum in data:
+                if signum not in SIGNALS:
+                    continue
+                self._arrived += 1
                 if (
-                    signum in SIGNALS
-                    and self.installed
+                    self.installed
                     and self.phase != "work"
                     and signal.getsignal(signum) is self._handler
+                    and self._arrived > self.handled
                 ):
                     self._end(signum)
 
@@ -199,6 +211,7 @@ class DeferredSignals:
         return not self.received
 
     def _note(self, signum: int, frame: Any) -> None:
+        POLICY.handled += 1
         self.received = signal.Signals(signum).name
         if self.on_signal is not None:
             self.on_signal()
@@ -352,6 +365,7 @@ def held_signals() -> Iterator[None]:
     noted: list[int] = []
 
     def note(signum: int, frame: Any) -> None:
+        POLICY.handled += 1
         if signum not in noted:
             noted.append(signum)
 

@@ -181,28 +181,47 @@ def _record(
     complete: bool,
 ) -> None:
     """Fill one member's drifts and final values from its outputs and monitors."""
-    from ..core.result import Result
+    block = {k: np.asarray(v)[None] for k, v in values.items()}
+    _record_block(part, np.array([row]), layout, prec, block, conserved, complete)
 
-    reached = len(next(iter(values.values()))) if values else 0
-    monitors = {k: values[k] for k in layout.drift if k in values}
-    probe = Result(t=np.empty(0), variables={}, monitors=monitors, precision=prec)
+
+def _record_block(
+    part: Chunk,
+    rows: np.ndarray,
+    layout: Layout,
+    prec: Precision,
+    values: Mapping[str, np.ndarray],
+    conserved: Sequence[str],
+    complete: bool,
+) -> None:
+    """Fill the drifts and final values of the members at ``rows`` from their outputs and
+    monitors, each ``(members, times[, components])`` (members that reached as many times)."""
+    from ..core.result import relative_drift
+
+    reached = next(iter(values.values())).shape[1] if values else 0
     for name in layout.drift:
         if name not in conserved or name not in values or reached == 0:
             continue
-        d = np.abs(probe.drift(name))
-        if d.ndim > 1:
-            d = d.max(axis=1)
-        part.drift[name][row, :reached] = d.astype(np.float64)
+        m = values[name]
+        d = np.abs(relative_drift(m, vector=m.ndim > 2))
+        if d.ndim > 2:
+            d = d.max(axis=2)
+        part.drift[name][rows, :reached] = d.astype(np.float64)
     missing = [k for k in layout.drift if k not in conserved]
     if missing:
         note = f"; not conserved by this member's flow (drift NaN): {', '.join(missing)}"
-        part.message[row] += note
-    if complete:
-        last = [values[k][-1] if k in values else prec.number("nan") for k in layout.final]
-        if prec.kind == "double":
-            part.final[row] = np.array(last, dtype=np.float64)
-        else:
-            part.final[row] = prec.to_text(prec.array(last))
+        for row in rows:
+            part.message[row] += note
+    if not complete:
+        return
+    # An output a member's model does not have stays NaN (:func:`nan_final`).
+    columns = [(j, values[k][:, -1]) for j, k in enumerate(layout.final) if k in values]
+    if prec.kind == "double":
+        for j, column in columns:
+            part.final[rows, j] = np.asarray(column, dtype=np.float64)
+    else:
+        for j, column in columns:
+            part.final[rows, j] = prec.to_text(prec.array(list(column)))
 
 
 def _run_group(
@@ -286,26 +305,66 @@ def _lanes_group(
         # reference plane) needs that variant's code, which its batch does not hold.
         part.why[PATH_RUN] = "a hand-over to another variant of the model (run() compiles it)"
         _run_group(handed, part, layout, prec, threads)
-    for (row, _, model), run in zip(group, runs, strict=True):
-        if run.handover:
-            continue
+    kept = [(item, run) for item, run in zip(group, runs, strict=True) if not run.handover]
+    whole = [(item, run) for item, run in kept if run.status == 0 and len(run.states) == len(grid)]
+    # The members that reached every output time, their outputs evaluated at once.
+    bad = _record_whole(whole, part, layout, prec, compiled, model0, grid)
+    recorded = {id(run) for _, run in whole}
+    rest = [(item, run) for item, run in kept if id(run) not in recorded or item[0] in bad]
+    for (row, _, model), run in rest:
         reached = len(run.states)
         rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
         values = recording.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
         complete = run.status == 0
         part.message[row] = run.message
-        if complete and (bad := recording.first_nonfinite(model, values, grid)) is not None:
+        if complete and (found := recording.first_nonfinite(model, values, grid)) is not None:
             # As a lone run would: the member stops at its first non-finite output.
-            k, part.message[row] = bad
+            k, part.message[row] = found
             complete = False
             values = {n: v[:k] for n, v in values.items()}
+        _lane_counts(part, row, layout, run)
         part.status[row] = OK if complete else FAILED
-        part.steps[row] = run.counters["steps"]
-        for name in layout.events:
-            log = run.events.get(name)
-            part.events[name][row] = len(log) if log is not None else 0
         _record(part, row, layout, prec, values, model.conserved, complete)
     return len(handed)
+
+
+def _record_whole(
+    whole: list, part: Chunk, layout: Layout, prec: Precision, compiled: Any, model: Any, grid
+) -> set[int]:
+    """Record the members of ``whole`` (``((row, scene, model), LaneResult)`` pairs, every output
+    time reached) together; returns the rows of those with a non-finite output, left to the
+    caller (which records each up to its first)."""
+    from ..core import recording
+
+    if not whole:
+        return set()
+    n, m = len(grid), len(whole)
+    blocks = [
+        (run.states, run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None], n, axis=0), grid)
+        for _, run in whole
+    ]
+    each = recording.evaluate_blocks(compiled, model, blocks, prec)
+    values = {k: np.stack([v[k] for v in each]) for k in each[0]}
+    finite = np.ones(m, dtype=bool)
+    for name, v in values.items():
+        if name not in model.unbounded:
+            finite &= np.all(np.isfinite(v.reshape(m, -1)), axis=1)
+    rows = np.array([item[0] for item, _ in whole])
+    for (row, _, _), run in whole:
+        part.message[row] = run.message
+        _lane_counts(part, row, layout, run)
+    part.status[rows[finite]] = OK
+    good = {k: v[finite] for k, v in values.items()}
+    _record_block(part, rows[finite], layout, prec, good, model.conserved, True)
+    return set(rows[~finite].tolist())
+
+
+def _lane_counts(part: Chunk, row: int, layout: Layout, run: Any) -> None:
+    """A member's steps and event counts from its lanes' result."""
+    part.steps[row] = run.counters["steps"]
+    for name in layout.events:
+        log = run.events.get(name)
+        part.events[name][row] = len(log) if log is not None else 0
 
 
 def _ensemble_group(
@@ -349,7 +408,9 @@ def _ensemble_group(
             part.message[row] = reason(exc)
         return
     for i, ((row, _, model), run) in enumerate(zip(group, runs, strict=True)):
-        ta, outcome, nsteps, states = run[0], run[1], run[4], run[-1]
+        member = outcomes.EnsembleRun.of(run)
+        ta, states = member.integrator, member.states
+        outcome, nsteps = member.ended.outcome, member.ended.steps
         reached = len(states)
         complete = outcome == hy.taylor_outcome.time_limit and reached == len(grid)
         if complete:
@@ -357,7 +418,7 @@ def _ensemble_group(
         else:
             # heyoka's time is NaN once the state is: name the last output time kept instead.
             kept = grid[reached - 1] if reached else grid[0]
-            if outcomes.zero_step(outcome, run[2]):
+            if member.ended.zero_step:
                 part.message[row] = outcomes.zero_step_message(model, ta.time)
             elif outcome == hy.taylor_outcome.err_nf_state:
                 part.message[row] = outcomes.nonfinite(kept)

@@ -22,7 +22,6 @@ any scene. Running a study: :mod:`.sweep`; its file: :mod:`.sweep_result`.
 
 from __future__ import annotations
 
-import copy
 import itertools
 import math
 import re
@@ -295,8 +294,10 @@ class Study:
         return list(zip(*columns, strict=True))
 
     def member_dict(self, values: Sequence[Number]) -> dict[str, Any]:
-        """The scene dictionary of the member with these parameter values."""
-        data = copy.deepcopy(dict(self.scene))
+        """The scene dictionary of the member with these parameter values (the tables and lists
+        on the way to a value copied, the rest shared with the study's scene, which nothing
+        changes: :meth:`Scene.from_dict` copies what it keeps)."""
+        data = dict(self.scene)
         for p, value in zip(self.parameters, values, strict=True):
             _substitute(data, p.path, value)
         return data
@@ -508,9 +509,14 @@ def _check_target(scene: Mapping[str, Any], path: tuple, name: str, where: str) 
 
 
 def _substitute(data: dict[str, Any], path: tuple, value: Number) -> None:
+    """Set ``value`` at ``path`` in ``data``, copying each table and list on the way (``data``
+    itself is the caller's copy)."""
     node: Any = data
     for key in path[:-1]:
-        node = node[key] if isinstance(key, int) else node.setdefault(key, {})
+        child = node[key] if isinstance(key, int) else node.get(key, {})
+        child = list(child) if isinstance(child, list | tuple) else dict(child)
+        node[key] = child
+        node = child
     node[path[-1]] = value
 
 

@@ -201,3 +201,31 @@ def test_a_full_stdout_changes_nothing_but_the_report(hostile, tmp_path, monkeyp
     monkeypatch.setattr(sys, "stdout", _Full())
     o = hostile.run(argv, expect="done", out=out)
     assert o.stderr.count("warning: stdout could not be written: [Errno 28]") == 1
+
+
+@pytest.mark.covers("class:8")
+def test_a_signal_a_handler_took_is_not_acted_on_again_once_the_work_is_done(monkeypatch):
+    """The policy's watching thread reads every signal's byte from the wakeup pipe, perhaps
+    late on a busy machine: one that a handler already took during the work (a write held it
+    and re-raised it) must not end the process once the report is printing. (It did, in an
+    in-process hostile case: the pytest worker died, 'node down: Not properly terminated'.)"""
+    from cayley_heyoka.core import signals
+
+    policy = signals.SignalPolicy()
+    ended: list[int] = []
+    monkeypatch.setattr(policy, "_end", ended.append)
+    monkeypatch.setattr(signals.signal, "getsignal", lambda signum: policy._handler)
+    policy.installed, policy.phase = True, "done"
+
+    def watch(handled: int) -> list[int]:
+        ended.clear()
+        policy.handled, policy._arrived = handled, 0
+        r, w = os.pipe()
+        os.write(w, bytes([signal.SIGINT]))
+        os.close(w)
+        policy._watch(r)  # returns at the end of the pipe
+        os.close(r)
+        return list(ended)
+
+    assert watch(handled=1) == []  # taken during the work: not the watcher's
+    assert watch(handled=0) == [signal.SIGINT]  # the main thread busy in C: ends the process
