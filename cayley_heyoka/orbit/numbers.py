@@ -59,12 +59,11 @@ def structure(scene: Scene) -> str:
     """
     orbit: Orbit = scene.model
     data = {k: v for k, v in scene.source.items()}
-    table = {k: _MASK for k in data.get("orbit", {})}
-    table["formulation"] = orbit.formulation
-    if "elements" in table:
-        table["elements"] = dict.fromkeys(data["orbit"]["elements"], _MASK)
-    table["equatorial_limit"] = _zero_or_mask(orbit.equatorial_limit)
-    data["orbit"] = table
+    data["orbit"] = {
+        "formulation": orbit.formulation,
+        "initial": orbit.initial[0],  # elements, or position and velocity
+        "equatorial_limit": _zero_or_mask(orbit.equatorial_limit),
+    }
     data["perturbations"] = {perturbation_key(t): _term_structure(t) for t in orbit.perturbations}
     if orbit.plane is not None:
         plane = orbit.plane
