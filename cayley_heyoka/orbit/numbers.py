@@ -16,6 +16,8 @@ variant a Cayley run starts in (from sin Φ at the start).
 from __future__ import annotations
 
 import json
+import threading
+import weakref
 from typing import Any
 
 import mpmath
@@ -111,10 +113,25 @@ def start_variant(scene: Scene) -> str | None:
     orbit: Orbit = scene.model
     if not hands_over(orbit):
         return None
+    # Asked by the structure and by the numbers of each scene: computed once a scene.
+    held = _VARIANTS.get(id(scene))
+    if held is not None and held[0]() is scene:
+        return held[1]
     with mpmath.workdps(scene.integrator.precision.dps + GUARD_DIGITS):
         t0 = scene_mpf(start_time(scene))
         low = sin_phi(orbit, t0) <= scene_mpf(orbit.equatorial_limit)
-    return TILTED if low else LEVEL
+    variant = TILTED if low else LEVEL
+    with _LOCK:
+        if len(_VARIANTS) >= _VARIANTS_HELD:
+            _VARIANTS.pop(next(iter(_VARIANTS)))
+        _VARIANTS[id(scene)] = (weakref.ref(scene), variant)
+    return variant
+
+
+#: The start variants of the scenes last asked about (by id, with a reference to check it).
+_VARIANTS: dict[int, tuple[weakref.ref, str]] = {}
+_VARIANTS_HELD = 64
+_LOCK = threading.Lock()
 
 
 def numbers(scene: Scene) -> Numbers:
