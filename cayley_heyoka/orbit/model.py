@@ -44,10 +44,10 @@ from .encke import Encke
 from .family import FAMILY
 from .numbers import (
     GUARD_DIGITS,
-    _plane_angles,
     initial_cartesian,
     initial_field,
     initial_state,
+    plane_angles,
     plane_angles_at,
     sin_phi,
     start_time,
@@ -423,7 +423,7 @@ def _plane_expressions(
         key = f"reference_plane.{name}"
         return pars.add(key, values[key])
 
-    (theta, sigma, phi), (th1, sg1, ph1) = _plane_angles(motion, hy.time, value)
+    (theta, sigma, phi), (th1, sg1, ph1) = plane_angles(motion, hy.time, value)
     return eq.ReferencePlane(theta, sigma, phi, th1, sg1, ph1, motion.departure_point)
 
 

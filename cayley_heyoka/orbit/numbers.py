@@ -192,7 +192,7 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
 
 
 def plane_numbers(motion: PlaneMotion | None) -> dict[str, Any]:
-    """The reference plane's parameters by name: the numbers :func:`_plane_angles` builds (a
+    """The reference plane's parameters by name: the numbers :func:`plane_angles` builds (a
     rate that is exactly zero has none)."""
     out: dict[str, Any] = {}
     if motion is None:
@@ -202,7 +202,7 @@ def plane_numbers(motion: PlaneMotion | None) -> dict[str, Any]:
         out[f"reference_plane.{name}"] = v
         return scene_mpf(v)
 
-    _plane_angles(motion, mpmath.mpf(0), value)
+    plane_angles(motion, mpmath.mpf(0), value)
     return out
 
 
@@ -269,7 +269,7 @@ def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) ->
         return [mpmath.nstr(c, dps, strip_zeros=False) for c in values]
 
 
-def _plane_angles(motion: PlaneMotion, t: Any, value: Any) -> tuple[tuple, tuple]:
+def plane_angles(motion: PlaneMotion, t: Any, value: Any) -> tuple[tuple, tuple]:
     """(θ′, σ′, φ′) and their rates at time ``t`` (None for a rate that is exactly zero).
 
     ``value(name, number)`` builds each number: heyoka (``value`` allocates a parameter, ``t``
@@ -307,7 +307,7 @@ def plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
     """(θ′, σ′, φ′) at time t in mpmath (zeros for the fixed frame)."""
     if motion is None:
         return (mpmath.mpf(0),) * 3
-    return _plane_angles(motion, scene_mpf(t), lambda _, v: scene_mpf(v))[0]
+    return plane_angles(motion, scene_mpf(t), lambda _, v: scene_mpf(v))[0]
 
 
 def _plane_matrix_at(motion: PlaneMotion | None, t: Any) -> frames.Matrix:
