@@ -28,7 +28,7 @@ scenes differing only in numbers share one compiled integrator.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -49,32 +49,48 @@ _MAX_DEGREE = 40
 
 @dataclass
 class Context:
-    """What a disturbing term may use: μ (a parameter) and the parameter table.
+    """What a disturbing term may use: μ (a parameter), the parameter table and the values of
+    the terms' parameters.
 
     Numbers derived from several scene numbers (``μ Jₙ Rⁿ``, a unit axis, the perturber's
-    orbit axes) are computed here, in mpmath with ``dps`` digits, and enter the equations as one
-    parameter each: heyoka evaluates an expression of parameters alone at every Taylor order of
-    every step, which made the J2 system cost 1.7× the hand-written one; precomputed, it also
-    carries one rounding instead of several.
+    orbit axes) are computed by each term's ``values`` in mpmath with ``dps`` digits, and enter
+    the equations as one parameter each: heyoka evaluates an expression of parameters alone at
+    every Taylor order of every step, which made the J2 system cost 1.7× the hand-written
+    one; precomputed, it also carries one rounding instead of several. ``values`` holds them
+    by parameter name (the model's numbers, :mod:`.numbers`); None: each term computes its
+    own from μ's value in the table.
     """
 
     mu: Expr
     pars: ParTable
     dps: int = 40
+    values: Mapping[str, Any] | None = None
 
-    def constant(self, name: str, compute: Callable[[], Any]) -> Expr:
-        """A parameter holding ``compute()``, evaluated in mpmath at ``dps`` digits."""
-        with mpmath.workdps(self.dps):
-            return self.pars.add(name, mpmath.nstr(compute(), self.dps, strip_zeros=False))
+    def values_for(self, term: Any) -> Mapping[str, Any]:
+        """The values of ``term``'s parameters."""
+        if self.values is not None:
+            return self.values
+        return term.values(self.mu_value, self.dps)
 
-    def exact(self, value: Number) -> mpmath.mpf:
-        """A scene number as an mpmath number, to ``dps`` digits."""
-        with mpmath.workdps(self.dps):
-            return rational_mpf(exact_fraction(value))
+    def par(self, name: str, values: Mapping[str, Any]) -> Expr:
+        """The parameter ``name``, allocated on first use with its value from ``values``."""
+        if name in self.pars.names:
+            return hy.par[self.pars.index(name)]
+        return self.pars.add(name, values[name])
 
     @property
     def mu_value(self) -> Number:
         return self.pars.values[self.pars.index("mu")]
+
+
+def _exact(value: Number) -> mpmath.mpf:
+    """A scene number as an mpmath number, at the current precision."""
+    return rational_mpf(exact_fraction(value))
+
+
+def _text(value: Any, dps: int) -> str:
+    """A parameter's value as decimal text with ``dps`` digits."""
+    return mpmath.nstr(value, dps, strip_zeros=False)
 
 
 def legendre_scaled(n: int, s: Expr, r2: Expr) -> Expr:
@@ -139,27 +155,32 @@ class Zonal:
         return vectors.dot(self.unit_axis(ctx), x)
 
     def unit_axis(self, ctx: Context) -> list[Expr]:
-        """k̂ as three parameters, normalised in mpmath (``zonal.axis_unit[i]``), allocated on
-        first use (Ω and its gradient share them)."""
-        names = [f"zonal.axis_unit[{i}]" for i in range(3)]
-        if names[0] in ctx.pars.names:
-            return [hy.par[ctx.pars.index(name)] for name in names]
-        k = [ctx.exact(c) for c in self.axis]
-        return [
-            ctx.constant(f"zonal.axis_unit[{i}]", lambda i=i: k[i] / mpmath.norm(k))
-            for i in range(3)
-        ]
+        """k̂ as three parameters (``zonal.axis_unit[i]``), allocated on first use (Ω and its
+        gradient share them)."""
+        values = ctx.values_for(self)
+        return [ctx.par(f"zonal.axis_unit[{i}]", values) for i in range(3)]
+
+    def values(self, mu: Number, dps: int) -> dict[str, str]:
+        """The parameters' values, in mpmath with ``dps`` digits: k̂ normalised (an oblique
+        axis only) and ``zonal.Cn`` = −μ Jₙ Rⁿ / n!."""
+        out = {}
+        with mpmath.workdps(dps):
+            if self.coordinate_axis() is None:
+                k = [_exact(c) for c in self.axis]
+                for i in range(3):
+                    out[f"zonal.axis_unit[{i}]"] = _text(k[i] / mpmath.norm(k), dps)
+            m, R = _exact(mu), _exact(self.radius)
+            for n, J in self.coefficients:
+                out[f"zonal.C{n}"] = _text(-m * _exact(J) * R**n / mpmath.factorial(n), dps)
+        return out
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         r2 = vectors.dot(x, x)
         s = self._axial(x, ctx)
-        mu, R = ctx.exact(ctx.mu_value), ctx.exact(self.radius)
+        values = ctx.values_for(self)
         terms = []
-        for n, J in self.coefficients:
-            # −μ Jₙ Rⁿ / n! as one parameter.
-            Cn = ctx.constant(
-                f"zonal.C{n}", lambda n=n, J=J: -mu * ctx.exact(J) * R**n / mpmath.factorial(n)
-            )
+        for n, _ in self.coefficients:
+            Cn = ctx.par(f"zonal.C{n}", values)  # −μ Jₙ Rⁿ / n!
             # Cₙ (n! rⁿ Pₙ(s/r)) / r²ⁿ⁺¹, with r²ⁿ⁺¹ as a power of r² (cheap in Taylor form).
             terms.append(Cn * legendre_scaled(n, s, r2) * r2 ** (-(n + 0.5)))
         return _sum(terms)
@@ -300,67 +321,92 @@ class ThirdBody:
         q = exact_fraction(self.a) * (1 - exact_fraction(self.eccentricity))
         return rational_mpf(q)
 
-    def axes(self, ctx: Context) -> tuple[list, list]:
-        """P̂ (towards the pericentre) and Q̂ (90° ahead) of the perturber's orbit, in mpmath;
-        for a circular orbit P̂ points to the node (ω is counted in the phase instead)."""
-        node, i = ctx.exact(self.node), ctx.exact(self.inclination)
+    def axes(self) -> tuple[list, list]:
+        """P̂ (towards the pericentre) and Q̂ (90° ahead) of the perturber's orbit, in mpmath
+        at the current precision; for a circular orbit P̂ points to the node (ω is counted in
+        the phase instead)."""
+        node, i = _exact(self.node), _exact(self.inclination)
         rot = vectors.matmul(frames.rotation_z(node), frames.rotation_x(i))
         if not self.circular:
-            rot = vectors.matmul(rot, frames.rotation_z(ctx.exact(self.argument_of_pericentre)))
+            rot = vectors.matmul(rot, frames.rotation_z(_exact(self.argument_of_pericentre)))
         return [row[0] for row in rot], [row[1] for row in rot]
 
     def normal(self, ctx: Context) -> list[Expr]:
         """Unit normal of the perturber's orbit, P̂ × Q̂, as parameters (for monitors)."""
-        with mpmath.workdps(ctx.dps):
-            P, Q = self.axes(ctx)
-            n = vectors.cross(P, Q)
-        return [ctx.constant(f"third_body.normal[{i}]", lambda i=i: n[i]) for i in range(3)]
+        values = ctx.values_for(self)
+        return [ctx.par(f"third_body.normal[{i}]", values) for i in range(3)]
 
-    def mean_anomaly(self, ctx: Context) -> mpmath.mpf:
-        """M₀, from ``mean_anomaly0`` or ``mean_longitude0 − node − ω``."""
+    def mean_anomaly(self) -> mpmath.mpf:
+        """M₀, from ``mean_anomaly0`` or ``mean_longitude0 − node − ω`` (current precision)."""
         if self.mean_longitude0 is None:
-            return ctx.exact(self.mean_anomaly0)
+            return _exact(self.mean_anomaly0)
         return (
-            ctx.exact(self.mean_longitude0)
-            - ctx.exact(self.node)
-            - ctx.exact(self.argument_of_pericentre)
+            _exact(self.mean_longitude0) - _exact(self.node) - _exact(self.argument_of_pericentre)
         )
+
+    def values(self, mu: Number, dps: int) -> dict[str, Any]:
+        """The parameters' values, in mpmath with ``dps`` digits: every product of scene
+        numbers :meth:`position` and :meth:`omega` use, and the orbit normal a circular
+        perturber's Jacobi monitor uses (:meth:`normal`)."""
+        out: dict[str, Any] = {"third_body.n": self.n}
+        with mpmath.workdps(dps):
+            P, Q = self.axes()
+            a, e = _exact(self.a), _exact(self.eccentricity)
+            b = a * mpmath.sqrt(1 - e * e)
+            M0 = self.mean_anomaly()
+            for i in range(3):
+                out[f"third_body.aP[{i}]"] = _text(a * P[i], dps)
+            for i in range(3):
+                out[f"third_body.bQ[{i}]"] = _text(b * Q[i], dps)
+            if self.circular:
+                w = _exact(self.argument_of_pericentre)
+                out["third_body.phase0"] = _text(w + M0, dps)
+            else:
+                out["third_body.eccentricity"] = _text(e, dps)
+                out["third_body.mean_anomaly0"] = _text(M0, dps)
+                for i in range(3):
+                    out[f"third_body.centre[{i}]"] = _text(-e * a * P[i], dps)
+            if self.degree is None:
+                out["third_body.gm"] = self.gm
+            else:
+                gm = _exact(self.gm)
+                for k in range(2, self.degree + 1):
+                    out[f"third_body.gm_over_factorial[{k}]"] = _text(gm / mpmath.factorial(k), dps)
+            if self.circular:
+                n = vectors.cross(P, Q)
+                for i in range(3):
+                    out[f"third_body.normal[{i}]"] = _text(n[i], dps)
+        return out
 
     def position(self, ctx: Context) -> list[Expr]:
         """``x₃(t) = R₃(node) R₁(i) R₃(ω) (in-plane position)``, Kepler's equation by heyoka.
 
         Circular: ``a (P̂ cos λ + Q̂ sin λ)``, λ = ω + M₀ + n t. Elliptic:
         ``−e a P̂ + a P̂ cos E + a √(1 − e²) Q̂ sin E``, E − e sin E = M₀ + n t. Every product of
-        scene numbers is one parameter.
+        scene numbers is one parameter (:meth:`values`).
         """
-        with mpmath.workdps(ctx.dps):
-            P, Q = self.axes(ctx)
-            a, e = ctx.exact(self.a), ctx.exact(self.eccentricity)
-            b = a * mpmath.sqrt(1 - e * e)
-            M0 = self.mean_anomaly(ctx)
-        n = ctx.pars.add("third_body.n", self.n)
-        aP = [ctx.constant(f"third_body.aP[{i}]", lambda i=i: a * P[i]) for i in range(3)]
-        bQ = [ctx.constant(f"third_body.bQ[{i}]", lambda i=i: b * Q[i]) for i in range(3)]
+        values = ctx.values_for(self)
+        n = ctx.par("third_body.n", values)
+        aP = [ctx.par(f"third_body.aP[{i}]", values) for i in range(3)]
+        bQ = [ctx.par(f"third_body.bQ[{i}]", values) for i in range(3)]
         if self.circular:
-            w = ctx.exact(self.argument_of_pericentre)
-            phase = ctx.constant("third_body.phase0", lambda: w + M0) + n * hy.time
+            phase = ctx.par("third_body.phase0", values) + n * hy.time
             c, s = hy.cos(phase), hy.sin(phase)
             return [aP[i] * c + bQ[i] * s for i in range(3)]
         E = hy.kepE(
-            ctx.constant("third_body.eccentricity", lambda: e),
-            ctx.constant("third_body.mean_anomaly0", lambda: M0) + n * hy.time,
+            ctx.par("third_body.eccentricity", values),
+            ctx.par("third_body.mean_anomaly0", values) + n * hy.time,
         )
-        centre = [
-            ctx.constant(f"third_body.centre[{i}]", lambda i=i: -e * a * P[i]) for i in range(3)
-        ]
+        centre = [ctx.par(f"third_body.centre[{i}]", values) for i in range(3)]
         c, s = hy.cos(E), hy.sin(E)
         return [centre[i] + aP[i] * c + bQ[i] * s for i in range(3)]
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         x3 = self.position(ctx)
         r3sq = vectors.dot(x3, x3)
+        values = ctx.values_for(self)
         if self.degree is None:
-            gm = ctx.pars.add("third_body.gm", self.gm)
+            gm = ctx.par("third_body.gm", values)
             d = [x[i] - x3[i] for i in range(3)]
             direct = vectors.dot(d, d) ** -0.5
             indirect = vectors.dot(x, x3) * r3sq**-1.5
@@ -370,12 +416,8 @@ class ThirdBody:
         r2 = vectors.dot(x, x)
         s = vectors.dot(x, x3) * r3sq**-0.5
         terms = []
-        gm_value = ctx.exact(self.gm)
         for k in range(2, self.degree + 1):
-            ck = ctx.constant(
-                f"third_body.gm_over_factorial[{k}]",
-                lambda k=k: gm_value / mpmath.factorial(k),
-            )
+            ck = ctx.par(f"third_body.gm_over_factorial[{k}]", values)  # Gm₃/k!
             terms.append(ck * legendre_scaled(k, s, r2) * r3sq ** (-(k + 1) / 2))
         return _sum(terms)
 
@@ -394,6 +436,10 @@ class UserPotential:
             raise SceneError(f"{where}.Omega", "is required: Ω as text over x, y, z, r, t, mu")
         text = expression_text(table["Omega"], f"{where}.Omega")
         return cls(text, uses_time(text))
+
+    def values(self, mu: Number, dps: int) -> dict[str, Any]:
+        """None of its own: the literals of its text are the structure's (``FIELD#k``)."""
+        return {}
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
         symbols = dict(zip("xyz", x, strict=True))

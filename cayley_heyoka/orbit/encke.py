@@ -54,7 +54,7 @@ ellipse (e ≥ 1) ends the run there.
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import heyoka as hy
@@ -108,7 +108,10 @@ class Unbound(ArithmeticError):
 
 
 class Encke:
-    """The parameters, equations and rectification of Encke's formulation for one scene.
+    """The parameters, equations and rectification of Encke's formulation for one structure.
+
+    The handler reads every number from the parameter vector it is given (μ and the
+    ellipse), so that it serves every scene of its structure.
 
     Parameters
     ----------
@@ -117,22 +120,21 @@ class Encke:
     precision
         The run's precision.
     mu
-        The parameter holding μ; ``mu_value`` is its scene number.
-    mu_value
-        μ as given (decimal text or number), rounded here to the run's precision as the
-        equations see it.
+        The parameter holding μ (named ``mu`` in ``pars``).
+    values
+        The ``encke.*`` parameters' values: the initial osculating ellipse (:func:`start`).
     """
 
-    def __init__(self, pars: ParTable, precision: Precision, mu: Expr, mu_value: Any) -> None:
+    def __init__(
+        self, pars: ParTable, precision: Precision, mu: Expr, values: Mapping[str, Any]
+    ) -> None:
         self.precision = precision
         self.arith = _MpArithmetic(precision)
         self._compiled = _compiles(precision)
         self.mu = mu
-        self._mu_run = precision.number(mu_value)
-        self.par = {name: pars.add(f"encke.{name}", "0") for name in PARAMETERS}
+        self._mu_index = pars.index("mu")
+        self.par = {name: pars.add(f"encke.{name}", values[f"encke.{name}"]) for name in PARAMETERS}
         self.index = {name: pars.index(f"encke.{name}") for name in PARAMETERS}
-        self._pars = pars
-        self._mu_ld = _ZERO + self._mu_run if self._compiled else None
         self._curve_slots = np.array([self.index[name] for name in _CURVE])
         self._set_slots = np.array([self.index[name] for name in _SET])
 
@@ -216,18 +218,6 @@ class Encke:
         return psi - self.par["next"]
 
     # --------------------------------------------------------------- rectification
-    def start(self, x: Sequence[Any], v: Sequence[Any]) -> list[str]:
-        """Rectify on the initial state (mpmath numbers): set the parameters' values in the
-        table and return the initial (δ, ψ) as decimal text."""
-        ar = _MpArithmetic(self.precision)
-        with ar.context():
-            X = [ar.exact(c) for c in x]
-            V = [ar.exact(c) for c in v]
-            values, state = _rectify(ar, ar.scalar(self._mu_run), X, V)
-        for name, value in values.items():
-            self._pars.values[self.index[name]] = ar.text(value)
-        return [ar.text(c) for c in state]
-
     def anomaly(self, ta: Any, pars: Any) -> Any:
         """The ellipse's eccentric anomaly E = 2ψ at the integrator's state, in the handler's
         extended precision (long double where the rectification is compiled, else mpmath)."""
@@ -242,7 +232,7 @@ class Encke:
             return None
         ar = self.arith
         with ar.context():
-            mu = ar.scalar(self._mu_run)
+            mu = ar.scalar(pars[self._mu_index])
             old = {name: ar.scalar(pars[self.index[name]]) for name in _CURVE}
             st = ta.state
             E = self.anomaly(ta, pars)
@@ -264,6 +254,27 @@ class Encke:
             for i, value in enumerate(state):
                 st[i] = ar.run(value)
         return None
+
+
+def start(
+    precision: Precision, mu_value: Any, x: Sequence[Any], v: Sequence[Any]
+) -> tuple[dict[str, str], list[str]]:
+    """Rectify on the initial state (mpmath numbers): the ``encke.*`` parameters' values and
+    the initial (δ, ψ), as decimal text.
+
+    Raises
+    ------
+    Unbound
+        The osculating orbit is not an ellipse in the run's precision.
+    """
+    ar = _MpArithmetic(precision)
+    with ar.context():
+        X = [ar.exact(c) for c in x]
+        V = [ar.exact(c) for c in v]
+        values, state = _rectify(ar, ar.scalar(precision.number(mu_value)), X, V)
+    return {f"encke.{name}": ar.text(value) for name, value in values.items()}, [
+        ar.text(c) for c in state
+    ]
 
 
 # ---------------------------------------------------------------------- extended arithmetic
@@ -497,7 +508,7 @@ def _rectify_compiled(enc: Encke, ta: Any, pars: Any) -> bool:
     args[0] = enc.anomaly(ta, pars)
     args[1:7] = st[:6]
     args[7:-1] = pars[enc._curve_slots]
-    args[-1] = enc._mu_ld
+    args[-1] = mu = _ZERO + pars[enc._mu_index]
     o = first(args)
     e, inv_a, h, E0, finite = o[6], o[7], o[8], o[15], o[17]
     if not (0 < e < 1 and inv_a > 0 and h > 0 and finite - finite == 0):
@@ -511,7 +522,7 @@ def _rectify_compiled(enc: Encke, ta: Any, pars: Any) -> bool:
     new[0], new[1], new[2] = e, 1 - e, o[16]
     new[3:9] = o[9:15]  # A, B rounded
     n = _ZERO + new[2]
-    k = np.cbrt(enc._mu_ld / (n * n))  # k³ = μ/n²
+    k = np.cbrt(mu / (n * n))  # k³ = μ/n²
     k2 = k * k
     psi = float(E0 / 2)
     args[:6] = o[:6]  # X, V

@@ -19,4 +19,6 @@ FAMILY = Family(
     formulations=("orbit.formulation", ("cartesian", "cayley", "quaternion", "encke")),
     with_formulation=later("cayley_heyoka.orbit.scene", "with_formulation"),
     memoirs=("cayley1860",),
+    structure=later("cayley_heyoka.orbit.numbers", "structure"),
+    numbers=later("cayley_heyoka.orbit.numbers", "numbers"),
 )

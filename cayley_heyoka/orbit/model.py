@@ -18,6 +18,7 @@ when it moves.
 from __future__ import annotations
 
 import threading
+from collections.abc import Mapping
 from typing import Any
 
 import heyoka as hy
@@ -29,8 +30,6 @@ from ..core.expressions import parse_expression
 from ..core.model import EventSpec, Model, ParTable, TerminalSpec
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
-from ..mechanics import frames
-from ..mechanics import kepler as el
 from . import equations as eq
 from .disturbing import (
     Context,
@@ -41,41 +40,52 @@ from .disturbing import (
     term_functions,
 )
 from .encke import STATE as ENCKE
-from .encke import Encke, Unbound
+from .encke import Encke
 from .family import FAMILY
+from .numbers import (
+    GUARD_DIGITS,
+    initial_cartesian,
+    initial_field,
+    initial_state,
+    plane_angles,
+    plane_angles_at,
+    sin_phi,
+    start_time,
+    start_variant,
+    variant_numbers,
+)
 from .revolutions import Revolutions
 from .scene import Orbit, PlaneMotion
 from .tilt import (
-    FRAME,
     LEVEL,
     TILTED,
     EquatorialHandover,
-    angles_in,
     reference_normal,
     sin2_on_reference,
 )
+
+__all__ = ["build_model", "initial_cartesian", "initial_state", "plane_angles_at", "validate"]
 
 CARTESIAN = ("x", "y", "z", "vx", "vy", "vz")
 CAYLEY = ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi")
 QUATERNION = ("qw", "qx", "qy", "qz")
 #: The events the family offers (its record, :data:`.family.FAMILY`, declares them).
 EVENTS = FAMILY.events
-_GUARD_DIGITS = 15
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated orbit scene into a :class:`~cayley_heyoka.core.model.Model`.
+    """Turn a validated orbit scene into a :class:`~cayley_heyoka.core.model.Model`, its
+    numbers from :func:`~cayley_heyoka.orbit.numbers.numbers`.
 
     A ``cayley`` scene that can approach the reference plane has two variants (:mod:`.tilt`):
     the run starts with the one its start's sin Φ calls for, and builds the other when a
-    terminal event hands over to it.
+    terminal event hands over to it. A variant's handlers and equations read no number of
+    the scene they were built for (the run's state and parameters go on), so the variants
+    of a structure's first scene serve every scene of it.
     """
-    orbit: Orbit = scene.model
-    if not _hands_over(orbit):
+    first = start_variant(scene)
+    if first is None:
         return _build(scene, None)
-    t0 = _start_time(scene)
-    with mpmath.workdps(scene.integrator.precision.dps + _GUARD_DIGITS):
-        low = _sin_phi(orbit, scene_mpf(t0)) <= scene_mpf(orbit.equatorial_limit)
     built: dict[str, Model] = {}
     lock = threading.Lock()
 
@@ -85,54 +95,29 @@ def build_model(scene: Scene) -> Model:
                 built[name] = _build(scene, name, variant)
             return built[name]
 
-    return variant(TILTED if low else LEVEL)
-
-
-def _hands_over(orbit: Orbit) -> bool:
-    """Whether a ``cayley`` orbit can reach the reference plane: Φ can change (a perturbation,
-    a turning plane) and ``equatorial_limit`` is not 0."""
-    if orbit.formulation != "cayley" or exact_fraction(orbit.equatorial_limit) == 0:
-        return False
-    plane = orbit.plane
-    turning = plane is not None and (
-        exact_fraction(plane.theta_rate) != 0 or exact_fraction(plane.phi_rate) != 0
-    )
-    return bool(orbit.perturbations) or turning
+    return variant(first)
 
 
 def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
     orbit: Orbit = scene.model
     prec = scene.integrator.precision
+    given = variant_numbers(scene, variant)
+    values = given.values
     pars = ParTable(prec)
-    mu = pars.add("mu", orbit.mu, "orbit.mu")
-    plane = _plane_expressions(orbit.plane, pars)
+    mu = pars.add("mu", values["mu"], "orbit.mu")
+    plane = _plane_expressions(orbit.plane, pars, values)
     X = list(hy.make_vars(*CARTESIAN[:3]))
-    ctx = Context(mu, pars, prec.dps + _GUARD_DIGITS)
+    ctx = Context(mu, pars, prec.dps + GUARD_DIGITS, values)
     omegas = term_functions(orbit.perturbations, X, ctx)
     for term, omega in zip(orbit.perturbations, omegas, strict=True):
         if not isinstance(term, UserPotential):  # a text records itself as it is parsed
             pars.source(f"perturbations.{perturbation_key(term)}", omega)
-    t0 = _start_time(scene)
 
-    b = _Builder(orbit, pars, plane, mu, omegas, X, prec, ctx)
-    if orbit.formulation == "encke":
-        # Its initial state is the deviation from the initial osculating ellipse, which the
-        # formulation's own rectification computes.
-        with mpmath.workdps(prec.dps + _GUARD_DIGITS):
-            try:
-                b.encke(*initial_cartesian(orbit, scene_mpf(t0)))
-            except Unbound as exc:
-                raise SceneError(
-                    _initial_field(orbit),
-                    f"{exc} at the start in {prec.name}: its eccentricity rounds to 1 in the "
-                    "run's precision (a nearly radial orbit), and formulation = 'encke' follows "
-                    "an osculating ellipse; use formulation = 'cartesian', or a higher precision",
-                ) from None
-    elif orbit.formulation == "cayley":
-        b.cayley(initial_state(orbit, t0, prec.dps + _GUARD_DIGITS, variant), variant)
+    b = _Builder(orbit, pars, plane, mu, omegas, X, prec, ctx, values)
+    if orbit.formulation == "cayley":
+        b.cayley(variant)
     else:
-        start = initial_state(orbit, t0, prec.dps + _GUARD_DIGITS)
-        getattr(b, orbit.formulation)(start)
+        getattr(b, orbit.formulation)()
 
     monitors, conserved = _monitors(orbit, b, ctx)
     wanted = scene.output.monitors
@@ -146,7 +131,7 @@ def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
         monitors = {k: v for k, v in monitors.items() if k in wanted}
         conserved = tuple(k for k in conserved if k in wanted)
     events = _events(scene, orbit, b, pars)
-    initial = [prec.number(v) for v in b.initial]
+    initial = list(given.initial_state)
     model = Model(
         "orbit", b.system, initial, pars, b.outputs, monitors, conserved, events, b.terminal
     )
@@ -184,22 +169,17 @@ def _provenance(model: Model, orbit: Orbit) -> None:
             pars.fields[i] = field
 
 
-def _initial_field(orbit: Orbit) -> str:
-    """The scene field holding the orbit's initial state."""
-    return "orbit.elements" if orbit.initial[0] == "elements" else "orbit.velocity"
-
-
 def validate(scene: Scene) -> None:
     """Geometric constraints that need the start time: raise :class:`SceneError` if violated."""
     orbit: Orbit = scene.model
     # In the run's precision and guard digits: an eccentricity of 1 − 10⁻³² is an ellipse to a
     # quad run, and 1 to 30 digits.
-    with mpmath.workdps(scene.integrator.precision.dps + _GUARD_DIGITS):
-        t = _start_time(scene)
+    with mpmath.workdps(scene.integrator.precision.dps + GUARD_DIGITS):
+        t = start_time(scene)
         x, v = initial_cartesian(orbit, t)
         H = vectors.cross(x, v)
         h = mpmath.sqrt(vectors.dot(H, H))
-        where = _initial_field(orbit)
+        where = initial_field(orbit)
         if h == 0:
             raise SceneError(
                 where, "gives rectilinear motion (x × v = 0): the orbit plane is undefined"
@@ -233,7 +213,7 @@ def validate(scene: Scene) -> None:
         # no cosec Φ is compiled: any inclination will do. With a limit the run starts on the
         # tilted frame below it (:mod:`.tilt`); without one, the equations need sin Φ ≠ 0.
         if orbit.formulation == "cayley" and (orbit.perturbations or turning):
-            if exact_fraction(orbit.equatorial_limit) == 0 and _sin_phi(orbit, t) == 0:
+            if exact_fraction(orbit.equatorial_limit) == 0 and sin_phi(orbit, t) == 0:
                 raise SceneError(
                     "orbit.formulation",
                     "'cayley' with orbit.equatorial_limit = 0 needs sin Φ ≠ 0, but the orbit "
@@ -243,64 +223,18 @@ def validate(scene: Scene) -> None:
                 )
 
 
-def _sin_phi(orbit: Orbit, t: Any) -> Any:
-    """sin Φ of the osculating orbit on the reference plane at time t (mpmath)."""
-    x, v = initial_cartesian(orbit, t)
-    H = vectors.cross(x, v)
-    h = mpmath.sqrt(vectors.dot(H, H))
-    M01 = _plane_matrix_at(orbit.plane, t)
-    n = vectors.matvec(vectors.transpose(M01), [c / h for c in H])
-    return mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
-
-
-def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
-    """Position and velocity at the start time, in mpmath at the current precision."""
-    if orbit.initial[0] == "cartesian":
-        _, x, v = orbit.initial
-        return [scene_mpf(c) for c in x], [scene_mpf(c) for c in v]
-    values = {k: scene_mpf(v) for k, v in orbit.initial[1].items()}
-    return el.elements_to_cartesian(
-        el.Elements(**values), scene_mpf(orbit.mu), frame=plane_angles_at(orbit.plane, t)
-    )
-
-
-def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list[str]:
-    """The formulation's initial state as decimal text with ``dps`` digits (not ``encke``,
-    whose state depends on the parameters its model allocates: see :meth:`_Builder.encke`);
-    Cayley's angles on the working frame of ``variant`` (:mod:`.tilt`) if given."""
-    if orbit.formulation == "encke":
-        raise ValueError("the encke state is the deviation from its ellipse: build the model")
-    with mpmath.workdps(dps):
-        t = scene_mpf(t)
-        x, v = initial_cartesian(orbit, t)
-        if orbit.formulation == "cartesian":
-            values = [*x, *v]
-        else:
-            frame = plane_angles_at(orbit.plane, t)
-            s = el.cartesian_to_cayley(x, v, sigma=scene_mpf(orbit.sigma0), frame=frame)
-            values = [s.r, s.rdot, s.rho, s.h]
-            if orbit.formulation == "cayley":
-                angles = (s.Theta, s.Sigma, s.Phi)
-                if variant == TILTED:
-                    angles = angles_in(TILTED, *angles)
-                values += list(angles)
-            else:
-                values += _plane_quaternion(frame, (s.Theta, s.Sigma, s.Phi))
-        return [mpmath.nstr(c, dps, strip_zeros=False) for c in values]
-
-
 # ---------------------------------------------------------------------- the formulations
 class _Builder:
     """Collects the system, the position and velocity expressions and the outputs."""
 
-    def __init__(self, orbit, pars, plane, mu, omegas, X, precision, ctx) -> None:
+    def __init__(self, orbit, pars, plane, mu, omegas, X, precision, ctx, values) -> None:
         self.orbit, self.pars, self.plane, self.mu = orbit, pars, plane, mu
+        self.values: Mapping[str, Any] = values  # the model's numbers, by parameter name
         self.precision, self.ctx = precision, ctx
         self.omegas, self.X = omegas, X
         self.Omega = None if not omegas else omegas[0] if len(omegas) == 1 else hy.sum(omegas)
         self.perturbed = bool(omegas)
         self.system: list[tuple[Any, Any]] = []
-        self.initial: list[str] = []
         self.outputs: dict[str, Any] = {}
         self.terminal: list[TerminalSpec] = []
         self.position: list[Any] = []
@@ -316,7 +250,7 @@ class _Builder:
         name = "orbit.equatorial_limit"
         if name in self.pars.names:
             return hy.par[self.pars.index(name)]
-        return self.pars.add(name, self.orbit.equatorial_limit)
+        return self.pars.add(name, self.values[name])
 
     def force(self, x: list[Any], r2: Any, radius: Any = None) -> Gradient | None:
         """∇Ω at the position x, |x|² = r2, or at r x̂ for ``x`` = x̂ and ``radius`` = r
@@ -329,12 +263,11 @@ class _Builder:
         """An expression of the Cartesian placeholders, composed with the position."""
         return hy.subs(expr, {str(x): p for x, p in zip(self.X, self.position, strict=True)})
 
-    def cartesian(self, start: list[str]) -> None:
+    def cartesian(self) -> None:
         x = self.X
         v = list(hy.make_vars(*CARTESIAN[3:]))
         rhs = eq.cartesian_rates(x, v, self.mu, self.force(x, vectors.dot(x, x)))
         self.system = list(zip([*x, *v], rhs, strict=True))
-        self.initial = start
         self.position, self.velocity = x, v
         self.momentum = vectors.cross(x, v)
         self.outputs = dict(zip(CARTESIAN, [*x, *v], strict=True))
@@ -342,14 +275,13 @@ class _Builder:
         self.apsis_function = vectors.dot(x, v)
         self.radius = hy.sqrt(vectors.dot(x, x))
 
-    def encke(self, x: list, v: list) -> None:
+    def encke(self) -> None:
         """δ = x − y from the osculating ellipse y, and ψ = E/2, half its eccentric anomaly
-        (:mod:`.encke`)."""
+        (:mod:`.encke`; the initial ellipse is among the numbers)."""
         d = list(hy.make_vars(*ENCKE[:3]))
         dv = list(hy.make_vars(*ENCKE[3:6]))
         psi = hy.make_vars(ENCKE[6])
-        en = Encke(self.pars, self.precision, self.mu, self.orbit.mu)
-        self.initial = en.start(x, v)
+        en = Encke(self.pars, self.precision, self.mu, self.values)
         y, ydot, parts = en.curve(psi)
         self.position = [y[i] + d[i] for i in range(3)]
         self.velocity = [ydot[i] + dv[i] for i in range(3)]
@@ -371,11 +303,11 @@ class _Builder:
         self.radius = hy.sqrt(vectors.dot(x_, x_))
         self.terminal.append(TerminalSpec(en.event(psi), 1, en, "rectifications"))
 
-    def cayley(self, start: list[str], variant: str | None = None) -> None:
+    def cayley(self, variant: str | None = None) -> None:
         """Cayley's equations; with ``variant`` (:mod:`.tilt`), on that working frame, with
         the terminal event that hands the run over to the other."""
         r, rdot, rho, h, Theta, Sigma, Phi = hy.make_vars(*CAYLEY)
-        turns = self._revolutions(start, rho)
+        turns = self._revolutions(rho)
         u = turns.angle(rho) - Sigma
         if variant is None:
             axes, _ = eq.cayley_axes(Theta, Phi, u, self.plane)
@@ -383,7 +315,6 @@ class _Builder:
             rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
             rhs += eq.plane_rates(u, h, Phi, partials[2], self.plane, Theta)
             self.system = list(zip([r, rdot, rho, h, Theta, Sigma, Phi], rhs, strict=True))
-            self.initial = start
             self._kinematics(r, rdot, h, axes)
             values = [r, rdot, turns.rho(rho), h, Theta, Sigma, Phi]
             self.outputs.update(zip(CAYLEY, values, strict=True))
@@ -391,10 +322,9 @@ class _Builder:
             return
         # Allocated alike in both variants: they share one parameter table.
         eps = self.equatorial_limit()
-        cos, sin = FRAME[variant]
-        c, s = self.pars.add("orbit.frame_cos", cos), self.pars.add("orbit.frame_sin", sin)
-        self.pars.add("orbit.theta_before", "0")
-        self.pars.add("orbit.sigma_before", "0")
+        c, s = (self.pars.add(k, self.values[k]) for k in ("orbit.frame_cos", "orbit.frame_sin"))
+        for name in ("orbit.theta_before", "orbit.sigma_before"):
+            self.pars.add(name, self.values[name])
         tilted = variant == TILTED
         general, _ = eq.cayley_axes(Theta, Phi, u, self.plane, (c, s))
         axes = general if tilted else eq.cayley_axes(Theta, Phi, u, self.plane)[0]
@@ -402,7 +332,6 @@ class _Builder:
         rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
         rhs += eq.plane_rates(u, h, Phi, partials[2], self.plane, Theta, (c, s) if tilted else None)
         self.system = list(zip([r, rdot, rho, h, Theta, Sigma, Phi], rhs, strict=True))
-        self.initial = start
         # Outputs, monitors and recorded events: one expression for both variants.
         self._kinematics(r, rdot, h, general)
         n = reference_normal(Theta, Phi, c, s)
@@ -424,17 +353,16 @@ class _Builder:
             down = 2 * hy.sin(Phi) - eps
             self.terminal.append(TerminalSpec(down, -1, turn, "equatorial_handovers"))
 
-    def quaternion(self, start: list[str]) -> None:
+    def quaternion(self) -> None:
         r, rdot, rho, h = hy.make_vars(*CAYLEY[:4])
         q = list(hy.make_vars(*QUATERNION))
-        turns = self._revolutions(start, rho)
+        turns = self._revolutions(rho)
         angle = turns.angle(rho)
         axes = eq.quaternion_axes(q, angle)
         partials = self._partials(r, axes)
         rhs = eq.in_plane_rates(r, rdot, h, self.mu, partials[0], partials[1])
         rhs += eq.quaternion_rates(q, angle, h, partials[2])
         self.system = list(zip([r, rdot, rho, h, *q], rhs, strict=True))
-        self.initial = start
         self._kinematics(r, rdot, h, axes)
         # Θ, Σ, Φ read off M₁₂ = M₀₁ᵀ ℛ(q) (docs/orbits.md, "The quaternion formulation"), for
         # output only.
@@ -452,11 +380,10 @@ class _Builder:
         self.outputs.update(zip(QUATERNION, q, strict=True))
         self.node_function = vectors.dot(self._plane_normal(), axes.radial)
 
-    def _revolutions(self, start: list[str], rho: Any) -> Revolutions:
-        """Whole turns of ρ kept out of the state (:mod:`.revolutions`); ρ₀ = start[2] is
-        replaced by its reduced value."""
-        turns = Revolutions(self.pars, self.precision, start[2], 2)
-        start[2] = turns.initial_rho
+    def _revolutions(self, rho: Any) -> Revolutions:
+        """Whole turns of ρ kept out of the state (:mod:`.revolutions`; the state's ρ₀ is
+        reduced among the numbers)."""
+        turns = Revolutions(self.pars, self.precision, self.values, 2)
         self.terminal.append(TerminalSpec(turns.event(rho), 1, turns, "revolutions"))
         return turns
 
@@ -486,91 +413,18 @@ class _Builder:
         return [M01[0][2], M01[1][2], M01[2][2]]
 
 
-# ---------------------------------------------------------------------- reference plane
-def _plane_angles(motion: PlaneMotion, t: Any, value: Any) -> tuple[tuple, tuple]:
-    """(θ′, σ′, φ′) and their rates at time ``t`` (None for a rate that is exactly zero).
-
-    ``value(name, number)`` builds each number: heyoka (``value`` allocates a parameter, ``t``
-    is ``hy.time``) and mpmath alike.
-    """
-
-    def rate(name: str, v: Any) -> Any:
-        # A rate that is exactly zero is left out (None), so a plane at rest compiles no
-        # time terms.
-        return None if exact_fraction(v) == 0 else value(name, v)
-
-    f = frames.functions_for(t)
-    th0, th1 = value("theta0", motion.theta0), rate("theta_rate", motion.theta_rate)
-    ph0, ph1 = value("phi0", motion.phi0), rate("phi_rate", motion.phi_rate)
-    sg0 = value("sigma0", motion.sigma0)
-    theta = th0 if th1 is None else th0 + th1 * t
-    phi = ph0 if ph1 is None else ph0 + ph1 * t
-    if not motion.departure_point:
-        sg1 = rate("sigma_rate", motion.sigma_rate)
-        sigma = sg0 if sg1 is None else sg0 + sg1 * t
-    elif th1 is None:
-        sg1, sigma = None, sg0
-    elif ph1 is None:
-        sg1 = th1 * f.cos(ph0)
-        sigma = sg0 + sg1 * t
-    else:
-        # σ′ = σ′₀ + θ̇′(sin φ′ − sin φ′₀)/φ̇′, written without the cancelling difference.
-        half = ph1 * t / 2
-        sigma = sg0 + 2 * th1 * f.cos(ph0 + half) * f.sin(half) / ph1
-        sg1 = th1 * f.cos(phi)
-    return (theta, sigma, phi), (th1, sg1, ph1)
-
-
-def _plane_expressions(motion: PlaneMotion | None, pars: ParTable) -> eq.ReferencePlane | None:
+def _plane_expressions(
+    motion: PlaneMotion | None, pars: ParTable, values: Mapping[str, Any]
+) -> eq.ReferencePlane | None:
     if motion is None:
         return None
 
-    def value(name: str, v: Any) -> Any:
-        return pars.add(f"reference_plane.{name}", v)
+    def value(name: str, _: Any) -> Any:
+        key = f"reference_plane.{name}"
+        return pars.add(key, values[key])
 
-    (theta, sigma, phi), (th1, sg1, ph1) = _plane_angles(motion, hy.time, value)
+    (theta, sigma, phi), (th1, sg1, ph1) = plane_angles(motion, hy.time, value)
     return eq.ReferencePlane(theta, sigma, phi, th1, sg1, ph1, motion.departure_point)
-
-
-def plane_angles_at(motion: PlaneMotion | None, t: Any) -> tuple:
-    """(θ′, σ′, φ′) at time t in mpmath (zeros for the fixed frame)."""
-    if motion is None:
-        return (mpmath.mpf(0),) * 3
-    return _plane_angles(motion, scene_mpf(t), lambda _, v: scene_mpf(v))[0]
-
-
-def _plane_matrix_at(motion: PlaneMotion | None, t: Any) -> frames.Matrix:
-    return frames.plane_matrix(*plane_angles_at(motion, t))
-
-
-def _plane_quaternion(frame: tuple, angles: tuple) -> list:
-    """q of M₀₂ = M(θ′, σ′, φ′) M(Θ, Σ, Φ) as a product of axis quaternions
-    (docs/orbits.md, "The quaternion formulation")."""
-
-    def axis(k: int, a: Any) -> list:
-        q = [mpmath.cos(a / 2), mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)]
-        q[k] = mpmath.sin(a / 2)
-        return q
-
-    q = [mpmath.mpf(1), mpmath.mpf(0), mpmath.mpf(0), mpmath.mpf(0)]
-    for theta, sigma, phi in (frame, angles):
-        for factor in (axis(3, theta), axis(1, phi), axis(3, -sigma)):
-            q = _hamilton(q, factor)
-    return q
-
-
-def _hamilton(a: list, b: list) -> list:
-    return [
-        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
-    ]
-
-
-def _start_time(scene: Scene) -> Any:
-    grid = scene.output
-    return grid.times[0] if grid.times is not None else grid.grid[0]
 
 
 # ---------------------------------------------------------------------- monitors and events

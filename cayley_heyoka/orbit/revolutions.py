@@ -23,6 +23,7 @@ per revolution.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import mpmath
@@ -36,6 +37,10 @@ Expr = Any  # a heyoka expression
 class Revolutions:
     """The revolution count ``k`` of ρ and the parameters that carry it.
 
+    ``k`` itself lives in the parameters: ``orbit.rho_offset`` is ``k C`` rounded once, from
+    which the handler reads ``k`` back (exactly, for any count a run can reach), so that the
+    handler keeps no number of its own and serves every scene of its structure.
+
     Parameters
     ----------
     pars
@@ -43,32 +48,26 @@ class Revolutions:
         ``orbit.rho_phase`` are allocated in it.
     precision
         The run's precision (``C`` is 2π rounded to it).
-    rho0
-        ρ at the start time, as decimal text with guard digits.
+    values
+        Their values (:func:`values`).
     state_index
         Position of ρ in the integrator's state.
     """
 
-    def __init__(self, pars: ParTable, precision: Precision, rho0: str, state_index: int) -> None:
+    def __init__(
+        self, pars: ParTable, precision: Precision, values: Mapping[str, Any], state_index: int
+    ) -> None:
         self.precision = precision
         self.state_index = state_index
-        self._dps = precision.dps + 20
-        with mpmath.workprec(precision.bits):
-            self._C = +(2 * mpmath.pi)  # exactly the value C takes in the run's precision
-        with mpmath.workprec(precision.bits + 128):
-            # C − 2π, to enough bits that k (C − 2π) rounds as the exact product would.
-            self._D = dyadic_parts(self._C - 2 * mpmath.pi)
-        self._C_parts = dyadic_parts(self._C)
-        self._C_run = precision.number(self._text(self._C))
-        with mpmath.workdps(self._dps):
-            rho = mpmath.mpf(rho0)
-            self.k = int(mpmath.floor(rho / self._C))
-            self.initial_rho = self._text(rho - self.k * self._C)
-        self.two_pi = pars.add("orbit.two_pi", self._text(self._C))
-        self.offset = pars.add("orbit.rho_offset", self._offset_text())
-        self.phase = pars.add("orbit.rho_phase", self._phase_text())
+        turn = _Turn.of(precision)
+        self._C_run = precision.number(turn.text(turn.C))
+        self._C_parts, self._D = turn.C_parts, turn.D
+        self.two_pi = pars.add("orbit.two_pi", values["orbit.two_pi"])
+        self.offset = pars.add("orbit.rho_offset", values["orbit.rho_offset"])
+        self.phase = pars.add("orbit.rho_phase", values["orbit.rho_phase"])
         self._offset_index = pars.index("orbit.rho_offset")
         self._phase_index = pars.index("orbit.rho_phase")
+        self._C_double = float(self._C_run)
 
     def rho(self, rho_state: Expr) -> Expr:
         """The continuous ρ, for output."""
@@ -82,30 +81,58 @@ class Revolutions:
         """Zero where the integrated ρ reaches C (crossed upwards)."""
         return rho_state - self.two_pi
 
+    def count(self, pars: Any) -> int:
+        """The revolutions ``k`` completed, read back from ``k C`` (its relative error, a few
+        units of 2⁻⁵³ in double, leaves the nearest integer exact below 2⁵⁰ revolutions)."""
+        return round(float(pars[self._offset_index]) / self._C_double)
+
     def __call__(self, ta: Any, pars: Any) -> None:
         """Terminal-event handler: move one revolution from the state into the parameters."""
         ta.state[self.state_index] -= self._C_run
-        self.k = k = self.k + 1
+        k = self.count(pars) + 1
         (mc, ec), (md, ed) = self._C_parts, self._D
         scaled = self.precision.dyadic
         pars[self._offset_index] = scaled(k * mc, ec)
         pars[self._phase_index] = scaled(k * md, ed)
 
-    def checkpoint(self) -> int:
-        """The revolutions completed (the engine's snapshot of a run carries it)."""
-        return self.k
 
-    def resume(self, k: int) -> None:
-        """Continue after ``k`` revolutions (the parameters come back with the snapshot)."""
-        self.k = int(k)
+class _Turn:
+    """C = 2π rounded to a precision, C − 2π, and the text of their multiples."""
 
-    def _offset_text(self) -> str:
-        with mpmath.workdps(self._dps):
-            return self._text(self.k * self._C)
+    _held: dict[int, _Turn] = {}
 
-    def _phase_text(self) -> str:
-        with mpmath.workdps(self._dps):
-            return self._text(self.k * (self._C - 2 * mpmath.pi))
+    def __init__(self, precision: Precision) -> None:
+        self.dps = precision.dps + 20
+        with mpmath.workprec(precision.bits):
+            self.C = +(2 * mpmath.pi)  # exactly the value C takes in the run's precision
+        with mpmath.workprec(precision.bits + 128):
+            # C − 2π, to enough bits that k (C − 2π) rounds as the exact product would.
+            self.D = dyadic_parts(self.C - 2 * mpmath.pi)
+        self.C_parts = dyadic_parts(self.C)
 
-    def _text(self, value: Any) -> str:
-        return mpmath.nstr(value, self._dps, strip_zeros=False)
+    @classmethod
+    def of(cls, precision: Precision) -> _Turn:
+        turn = cls._held.get(precision.bits)
+        if turn is None:
+            turn = cls._held[precision.bits] = cls(precision)
+        return turn
+
+    def text(self, value: Any) -> str:
+        return mpmath.nstr(value, self.dps, strip_zeros=False)
+
+
+def values(precision: Precision, rho0: str) -> tuple[dict[str, str], str]:
+    """The parameters of :class:`Revolutions` for ρ₀ = ``rho0`` (decimal text with guard
+    digits) and the reduced ρ₀ the integrator starts from: ρ₀ − k C, k = ⌊ρ₀ / C⌋."""
+    turn = _Turn.of(precision)
+    C = turn.C
+    with mpmath.workdps(turn.dps):
+        rho = mpmath.mpf(rho0)
+        k = int(mpmath.floor(rho / C))
+        reduced = turn.text(rho - k * C)
+        out = {
+            "orbit.two_pi": turn.text(C),
+            "orbit.rho_offset": turn.text(k * C),
+            "orbit.rho_phase": turn.text(k * (C - 2 * mpmath.pi)),
+        }
+    return out, reduced
