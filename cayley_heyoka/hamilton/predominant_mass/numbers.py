@@ -69,7 +69,7 @@ def numbers(scene: Scene) -> Numbers:
     dps = prec.dps + GUARD_DIGITS
     with mpmath.workdps(dps):
         states = [body.state(M, G) for body in ham.bodies]
-    initial = initial_state(ham, states, _start_time(scene), dps)
+    initial = initial_state(ham, _start_time(scene), dps, states)
     if ham.formulation == "elements":
         # The state holds the offsets δz = z − z₀ (model._offsets): z₀ are parameters.
         names = start_names(len(ham.bodies))
@@ -108,10 +108,10 @@ def _check_apart(states: list[tuple[list, list]], precision: Precision) -> None:
 
 
 def initial_state(
-    ham: Hamiltonian, states: list[tuple[list, list]], t: Number, dps: int
+    ham: Hamiltonian, t: Number, dps: int, states: list[tuple[list, list]] | None = None
 ) -> list[str]:
-    """The formulation's state at the start time ``t`` as decimal text with ``dps`` digits,
-    from (ξ, x′) of every body (``states``, computed with ``dps`` digits).
+    """The formulation's state at the start time ``t`` as decimal text with ``dps`` digits
+    (from ``states``, (ξ, x′) of every body computed with ``dps`` digits, when given).
 
     canonical: ξ of every body, then pᵢ = mᵢx′ᵢ; elements: (μ, τ, ϖ, λ, χ, ν) of every body,
     by the reverse conversion of §8.3 (:func:`.system.hamilton_elements`). Computed in mpmath
@@ -119,6 +119,10 @@ def initial_state(
     """
     with mpmath.workdps(dps):
         G, M = scene_mpf(ham.constants["G"]), scene_mpf(ham.constants["central_mass"])
+        if states is None:
+            states = [
+                body.state(ham.constants["central_mass"], ham.constants["G"]) for body in ham.bodies
+            ]
         if ham.formulation == "canonical":
             values = [v for x, _ in states for v in x]
             values += [
