@@ -128,9 +128,14 @@ def test_check_passes_and_writes_its_rows(tmp_path, capsys):
         assert len(f["rows"]) == 3 and f["series/t"].shape == (7,)
 
 
-def test_check_fails_with_exit_1_when_S_is_wrong(tmp_path, capsys, monkeypatch):
+def test_check_fails_with_exit_1_when_S_is_wrong(tmp_path, capsys, monkeypatch, request):
     import cayley_heyoka.hamilton.model as model
+    from cayley_heyoka.core import structures
 
+    # The patch changes what the build compiles for the same scene: neither a structure built
+    # before it nor the one built with it may serve another scene.
+    structures.clear()
+    request.addfinalizer(structures.clear)
     original = model.principal_rate
     monkeypatch.setattr(model, "principal_rate", lambda H, s, v: original(H, s, v) + 1e-6)
     scene = tmp_path / "pendulum.toml"

@@ -26,4 +26,6 @@ FAMILY = Family(
         ),
     },
     memoirs=("hamilton1835",),
+    structure=later("cayley_heyoka.hamilton.numbers", "structure"),
+    numbers=later("cayley_heyoka.hamilton.numbers", "numbers"),
 )

@@ -11,36 +11,38 @@ varying elements ``chi1 … chiN``, ``lambda1 … lambdaN`` of the split H = H�
 
 from __future__ import annotations
 
-from fractions import Fraction
+from collections.abc import Mapping
 from typing import Any
 
 import heyoka as hy
 import numpy as np
 
-from ..core.errors import SceneError
 from ..core.expressions import parse_expression
 from ..core.model import Model, ParTable
-from ..core.precision import exact_fraction, fraction_text
+from ..core.precision import exact_fraction
 from ..core.scene import Scene
 from .canonical import canonical_equations, principal_rate
 from .elements import check_flow, compose, element_equations
+from .numbers import numbers, same_numbers
 from .outputs import select_monitors, user_events, wants_principal_function
 from .scene import Hamiltonian
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated Hamiltonian scene into a :class:`~cayley_heyoka.core.model.Model`."""
+    """Turn a validated Hamiltonian scene into a :class:`~cayley_heyoka.core.model.Model`, its
+    numbers from :func:`~cayley_heyoka.hamilton.numbers.numbers`."""
     ham: Hamiltonian = scene.model
     if ham.model == "predominant_mass":
         from .predominant_mass.model import build_model as build_predominant_mass
 
         return build_predominant_mass(scene)
     prec = scene.integrator.precision
+    given = numbers(scene)
     n = ham.degrees
     eta = [hy.make_vars(f"eta{i + 1}") for i in range(n)]
     varpi = [hy.make_vars(f"varpi{i + 1}") for i in range(n)]
     pars = ParTable(prec)
-    H1, H2 = _split(ham, eta, varpi, pars, prec)
+    H1, H2 = _split(ham, eta, varpi, pars, given.values)
     H = H1 if H2 is None else H1 + H2
     if ham.formulation == "canonical":
         system = canonical_equations(H, eta, varpi)
@@ -48,20 +50,19 @@ def build_model(scene: Scene) -> Model:
         energy, state_varpi = H, varpi
         rate_of_S = None
     else:
-        system, outputs, energy, rate_of_S = _elements(scene, ham, eta, varpi, H1, H2, pars, prec)
+        system, outputs, energy, rate_of_S = _elements(ham, eta, varpi, H1, H2, pars)
         state_varpi = None
-    initial: list[Any] = [*ham.eta, *ham.varpi]
     if wants_principal_function(scene):
         S = hy.make_vars("S")
         if rate_of_S is None:
             rate_of_S = principal_rate(H, system, state_varpi)
         system.append((S, rate_of_S))
-        initial.append(0)
         outputs["S"] = S
     monitors = {"energy": energy}
     conserved = () if ham.time_dependent else ("energy",)
     monitors, conserved = select_monitors(scene, monitors, conserved)
     events = user_events(scene, outputs, pars)
+    same_numbers(pars, given)
     # (χ, λ) start at (η, ϖ): the flow of H₁ is the identity at t = 0.
     coordinates = ("eta", "chi") if ham.formulation == "canonical" else ("chi",)
     momenta = ("varpi", "lambda") if ham.formulation == "canonical" else ("lambda",)
@@ -71,7 +72,7 @@ def build_model(scene: Scene) -> Model:
     return Model(
         "hamiltonian",
         system,
-        [prec.number(v) for v in initial],
+        list(given.initial_state),
         pars,
         outputs,
         monitors,
@@ -81,11 +82,11 @@ def build_model(scene: Scene) -> Model:
     )
 
 
-def _split(ham: Hamiltonian, eta, varpi, pars: ParTable, prec) -> tuple[Any, Any]:
+def _split(ham: Hamiltonian, eta, varpi, pars: ParTable, values: Mapping) -> tuple[Any, Any]:
     """(H₁, H₂) of the scene; H₂ is None for a single user Hamiltonian."""
     symbols = {str(v): v for v in (*eta, *varpi)}
     if ham.model == "projectile":
-        return _projectile(eta, varpi, ham, pars, prec)
+        return _projectile(eta, varpi, pars, values)
     if ham.text is not None:
         return parse_expression(ham.text, symbols, pars, "hamiltonian.H"), None
     H1 = parse_expression(ham.split[0], symbols, pars, "hamiltonian.H1")
@@ -93,22 +94,18 @@ def _split(ham: Hamiltonian, eta, varpi, pars: ParTable, prec) -> tuple[Any, Any
     return H1, H2
 
 
-def _projectile(eta, varpi, ham: Hamiltonian, pars: ParTable, prec) -> tuple[Any, Any]:
+def _projectile(eta, varpi, pars: ParTable, values: Mapping) -> tuple[Any, Any]:
     """H₁ = ½|ϖ|² + g η₃ (free fall) and H₂ = ½{μ²(η₁² + η₂²) + ν² η₃²} (§5.1, §6), with g,
-    μ²/2, ν²/2 as parameters.
-
-    The squares are taken exactly from the scene's numbers and rounded once, so that no
-    expression of parameters alone is left for heyoka to evaluate at every Taylor order.
-    """
-    g = pars.add("projectile.g", ham.constants["g"], "hamiltonian.g")
-
-    def half_square(key: str) -> Any:
-        value = Fraction(exact_fraction(ham.constants[key])) ** 2 / 2
-        return pars.add(
-            f"projectile.{key}_squared_half", fraction_text(value, prec), f"hamiltonian.{key}"
+    μ²/2, ν²/2 as parameters (their values: :func:`.numbers.numbers`)."""
+    g = pars.add("projectile.g", values["projectile.g"], "hamiltonian.g")
+    mu2, nu2 = (
+        pars.add(
+            f"projectile.{key}_squared_half",
+            values[f"projectile.{key}_squared_half"],
+            f"hamiltonian.{key}",
         )
-
-    mu2, nu2 = half_square("mu"), half_square("nu")
+        for key in ("mu", "nu")
+    )
     H1 = 0.5 * hy.sum([p * p for p in varpi]) + g * eta[2]
     H2 = mu2 * (eta[0] * eta[0] + eta[1] * eta[1]) + nu2 * eta[2] ** 2
     return H1, H2
@@ -122,15 +119,10 @@ def _projectile_flow(chi, lam, pars: ParTable) -> tuple[list, list]:
     return flow_eta, flow_varpi
 
 
-def _elements(scene, ham: Hamiltonian, eta, varpi, H1, H2, pars: ParTable, prec):
+def _elements(ham: Hamiltonian, eta, varpi, H1, H2, pars: ParTable):
     """Hamilton's varying elements χ, λ of the split (:mod:`.elements`): the system, the
-    outputs (χ, λ and η, ϖ through the flow), H along the flow and dS/dt."""
-    start = scene.output.times[0] if scene.output.times is not None else scene.output.grid[0]
-    if exact_fraction(start) != 0:
-        raise SceneError(
-            "output.times",
-            "formulation = 'elements' starts at t = 0: its elements are the initial data there",
-        )
+    outputs (χ, λ and η, ϖ through the flow), H along the flow and dS/dt. (They start at
+    t = 0, where they are η, ϖ: :func:`.numbers.numbers` refuses another start.)"""
     n = ham.degrees
     chi = [hy.make_vars(f"chi{i + 1}") for i in range(n)]
     lam = [hy.make_vars(f"lambda{i + 1}") for i in range(n)]

@@ -9,6 +9,7 @@ import pytest
 
 import cayley_heyoka.hamilton.model as model
 from cayley_heyoka import Scene
+from cayley_heyoka.core import structures
 from cayley_heyoka.hamilton.principal import check_principal_function
 
 EPS = {"double": 2.0**-52, "quad": 2.0**-112}
@@ -63,8 +64,12 @@ def test_conjugate_point_is_reported_by_its_condition():
     assert check.condition[1] < 10 and check.condition[2] > 1e12
 
 
-def test_a_wrong_principal_function_is_caught(monkeypatch):
+def test_a_wrong_principal_function_is_caught(monkeypatch, request):
     """Negative control: integrate T + U + 1e-6 instead of T + U; ∂S/∂t then misses by 1e-6."""
+    # The patch changes what the build compiles for the same scene: neither a structure built
+    # before it nor the one built with it may serve another scene.
+    structures.clear()
+    request.addfinalizer(structures.clear)
     original = model.principal_rate
     monkeypatch.setattr(model, "principal_rate", lambda H, s, v: original(H, s, v) + 1e-6)
     check = check_principal_function(Scene.from_dict(projectile("double")))

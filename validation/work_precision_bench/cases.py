@@ -28,7 +28,7 @@ import rotation_cases
 
 import cayley_heyoka as ch
 from cayley_heyoka.hamilton.predominant_mass import system as hp
-from cayley_heyoka.hamilton.predominant_mass.model import initial_state as planets_initial_state
+from cayley_heyoka.hamilton.predominant_mass.numbers import initial_state as planets_initial_state
 from cayley_heyoka.mechanics import kepler as oe
 
 ROOT = Path(__file__).resolve().parents[2]

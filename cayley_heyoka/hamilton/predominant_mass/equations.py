@@ -21,7 +21,7 @@ at every Taylor order.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
 
 import heyoka as hy
@@ -51,6 +51,10 @@ class Coefficients:
         None makes them numeric constants of the expressions.
     precision
         The precision their values are rounded to.
+    values
+        Their values by parameter name (:meth:`values`, computed for the scene by
+        :func:`~cayley_heyoka.hamilton.predominant_mass.numbers.numbers`), taken instead of
+        computed; a coefficient missing from it is a fault (``KeyError``).
 
     Rational combinations are computed exactly and rounded once; the square roots are
     computed in mpmath with guard digits and rounded once.
@@ -63,33 +67,72 @@ class Coefficients:
         masses: Sequence[Number],
         pars: ParTable | None = None,
         precision: Precision | None = None,
+        values: Mapping[str, str] | None = None,
     ) -> None:
         self.G = exact_fraction(G)
         self.M = exact_fraction(central_mass)
         self.m = [exact_fraction(m) for m in masses]
         self.pars = pars
         self.precision = precision or Precision()
+        self._given = values
         self._made: dict[str, Expr] = {}
+        self._texts: dict[str, str] = {}
 
     @property
     def count(self) -> int:
         """Number of bodies N."""
         return len(self.m)
 
+    def values(self, formulation: str) -> dict[str, str]:
+        """The value of every coefficient the model of ``formulation`` uses, by parameter name
+        (``predominant_mass.<name>``), computed without building the equations.
+
+        The lists are the equations': :func:`hamiltonian` and the velocities x′ = p/m of the
+        canonical model, and for the elements also :func:`state_from_elements`,
+        :func:`disturbing_function` and p = m x′ (the build refuses a model whose coefficients
+        are not exactly these).
+        """
+        n = self.count
+        pairs = [(i, k) for i in range(n) for k in range(i + 1, n)]
+        self.half_inverse_central()
+        for i in range(n):
+            self.half_inverse_mass(i)
+            self.attraction(i)
+            self.inverse_mass(i)
+        for i, k in pairs:
+            self.mutual(i, k)
+        if formulation == "elements":
+            self.inverse_semi_major()
+            for i in range(n):
+                self.root_kepler(i)
+                self.eccentricity_factor(i)
+                self.velocity_factor(i)
+                self.mass(i)
+            for i, k in pairs:
+                self.indirect(i, k)
+        return {f"predominant_mass.{name}": text for name, text in self._texts.items()}
+
     def _make(self, name: str, value: Callable[[], Fraction | mpmath.mpf]) -> Expr:
         if name not in self._made:
-            prec = self.precision
-            with mpmath.workdps(prec.dps + _GUARD_DIGITS):
-                v = value()
-                if isinstance(v, Fraction):
-                    text = fraction_text(v, prec)
-                else:
-                    text = mpmath.nstr(v, prec.dps + _GUARD_DIGITS - 5, strip_zeros=False)
+            text = self._text(name, value)
             if self.pars is None:
-                self._made[name] = hy.expression(prec.number(text))
+                self._made[name] = hy.expression(self.precision.number(text))
             else:
                 self._made[name] = self.pars.add(f"predominant_mass.{name}", text)
         return self._made[name]
+
+    def _text(self, name: str, value: Callable[[], Fraction | mpmath.mpf]) -> str:
+        if self._given is not None:
+            return self._given[f"predominant_mass.{name}"]
+        prec = self.precision
+        with mpmath.workdps(prec.dps + _GUARD_DIGITS):
+            v = value()
+            if isinstance(v, Fraction):
+                text = fraction_text(v, prec)
+            else:
+                text = mpmath.nstr(v, prec.dps + _GUARD_DIGITS - 5, strip_zeros=False)
+        self._texts[name] = text
+        return text
 
     @staticmethod
     def _sqrt(value: Fraction) -> mpmath.mpf:

@@ -14,21 +14,19 @@ conserved; ``output.principal_function`` adds S = ∫ (T + U) dt.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from typing import Any
 
 import heyoka as hy
-import mpmath
 
-from ...core.errors import SceneError
 from ...core.model import Model, ParTable
-from ...core.precision import Number, Precision, scene_mpf
 from ...core.scene import Scene
+from ..numbers import same_numbers
 from ..outputs import select_monitors, user_events, wants_principal_function
 from ..scene import Hamiltonian
 from . import equations as pe
-from . import system as planets
+from .numbers import numbers, start_names
 
-_GUARD_DIGITS = 15
 # Compiled without compact mode, the element equations (Kepler's equation and the gradient of
 # H₂ through it) take ~25 s for two bodies against ~1 s in compact mode, at the same step
 # cost; the canonical equations take 0.5 / 1.9 / 4.2 s for 2 / 3 / 4 bodies (12 s for 6) and
@@ -38,15 +36,21 @@ _AXES = ("x", "y", "z")
 
 
 def build_model(scene: Scene) -> Model:
-    """Turn a validated predominant-mass scene into a :class:`~cayley_heyoka.core.model.Model`."""
+    """Turn a validated predominant-mass scene into a :class:`~cayley_heyoka.core.model.Model`,
+    its numbers from :func:`~cayley_heyoka.hamilton.predominant_mass.numbers.numbers`."""
     ham: Hamiltonian = scene.model
     prec = scene.integrator.precision
+    given = numbers(scene)
     n = len(ham.bodies)
     pars = ParTable(prec)
     c = pe.Coefficients(
-        ham.constants["G"], ham.constants["central_mass"], [b.mass for b in ham.bodies], pars, prec
+        ham.constants["G"],
+        ham.constants["central_mass"],
+        [b.mass for b in ham.bodies],
+        pars,
+        prec,
+        given.values,
     )
-    initial = initial_state(ham, _start_time(scene), prec.dps + _GUARD_DIGITS)
     outputs: dict[str, Any] = {}
     if ham.formulation == "canonical":
         xi = [list(hy.make_vars(*(f"{a}{i + 1}" for a in _AXES))) for i in range(n)]
@@ -72,16 +76,14 @@ def build_model(scene: Scene) -> Model:
         system.append((S, 2.0 * pe.kinetic_energy(p, c) - H))
         outputs["S"] = S
     if ham.formulation == "elements":
-        system, outputs, monitors, initial = _offsets(system, outputs, monitors, initial, pars)
-    if "S" in outputs:
-        initial.append("0")
+        system, outputs, monitors = _offsets(system, outputs, monitors, 6 * n, pars, given.values)
     monitors, conserved = select_monitors(scene, monitors, ("energy", "angular_momentum"))
     events = user_events(scene, outputs, pars)
-    _check_apart(ham, prec)
+    same_numbers(pars, given)
     model = Model(
         "hamiltonian",
         system,
-        [prec.number(v) for v in initial],
+        list(given.initial_state),
         pars,
         outputs,
         monitors,
@@ -91,27 +93,6 @@ def build_model(scene: Scene) -> Model:
     )
     _provenance(model)
     return model
-
-
-def _check_apart(ham: Hamiltonian, precision: Precision) -> None:
-    """Refuse bodies apart in the scene (its check is exact) but closer than the run's
-    precision resolves their positions: their distance would round to 0 or to its rounding
-    error, and H is singular there."""
-    with mpmath.workdps(precision.dps + _GUARD_DIGITS):
-        G, M = ham.constants["G"], ham.constants["central_mass"]
-        points = [body.state(M, G)[0] for body in ham.bodies]
-        resolution = mpmath.mpf(2) ** (1 - precision.bits)
-        for k, x in enumerate(points):
-            for i in range(k):
-                d = mpmath.norm([a - b for a, b in zip(x, points[i], strict=True)])
-                scale = max(mpmath.norm(x), mpmath.norm(points[i]))
-                if d <= resolution * scale:
-                    raise SceneError(
-                        f"hamiltonian.bodies[{k}]",
-                        f"starts {mpmath.nstr(d, 3)} from hamiltonian.bodies[{i}], within "
-                        f"{precision.name}'s rounding of their positions: H is singular where "
-                        "they meet; move them apart or choose a wider precision",
-                    )
 
 
 def _provenance(model: Model) -> None:
@@ -130,7 +111,9 @@ def _provenance(model: Model) -> None:
             pars.fields[i] = start or "hamiltonian.G, hamiltonian.central_mass, hamiltonian.bodies"
 
 
-def _offsets(system: list, outputs: dict, monitors: dict, initial: list[str], pars: ParTable):
+def _offsets(
+    system: list, outputs: dict, monitors: dict, count: int, pars: ParTable, values: Mapping
+) -> tuple[list, dict, dict]:
     """Integrate the elements' offsets δz = z − z₀ from their start values z₀ (parameters).
 
     The elements move by O(m/M) about z₀: a state holding z itself is rounded to ε|z| at every
@@ -138,14 +121,15 @@ def _offsets(system: list, outputs: dict, monitors: dict, initial: list[str], pa
     ε|δz|, O(m/M) of that. (Measured on N5 against z in the state: the position error 5×
     smaller at 100 orbits, 3× at 1000, where the rounding of the mean anomaly n(t − τ) takes
     over; docs/hamilton.md.)
-    The equations, outputs and monitors are the same expressions with z = z₀ + δz.
+    The equations, outputs and monitors are the same expressions with z = z₀ + δz; the first
+    ``count`` variables of ``system`` are the elements (S, if integrated, follows them) and
+    ``values`` holds z₀ (:func:`.numbers.numbers`).
     """
-    count = len(initial)  # the elements; S, if integrated, follows them
     names = [str(v) for v, _ in system[:count]]
     offsets = [hy.make_vars(f"delta_{name}") for name in names]
     table = {
-        name: pars.add(f"predominant_mass.{name}_start", value) + d
-        for name, d, value in zip(names, offsets, initial, strict=True)
+        name: pars.add(key, values[key]) + d
+        for name, d, key in zip(names, offsets, start_names(count // 6), strict=True)
     }
     rates = [(d, hy.subs(rhs, table)) for d, (_, rhs) in zip(offsets, system[:count], strict=True)]
     rates += [(v, hy.subs(rhs, table)) for v, rhs in system[count:]]
@@ -154,39 +138,4 @@ def _offsets(system: list, outputs: dict, monitors: dict, initial: list[str], pa
         k: [hy.subs(e, table) for e in v] if isinstance(v, list) else hy.subs(v, table)
         for k, v in monitors.items()
     }
-    return rates, outputs, monitors, ["0"] * count
-
-
-def initial_state(ham: Hamiltonian, t: Number, dps: int) -> list[str]:
-    """The formulation's state at the start time ``t`` as decimal text with ``dps`` digits.
-
-    canonical: ξ of every body, then pᵢ = mᵢx′ᵢ; elements: (μ, τ, ϖ, λ, χ, ν) of every body,
-    by the reverse conversion of §8.3 (:func:`.system.hamilton_elements`). Computed in mpmath
-    from the scene's exact numbers, so a real128 or multiprecision run starts exactly.
-    """
-    with mpmath.workdps(dps):
-        G, M = scene_mpf(ham.constants["G"]), scene_mpf(ham.constants["central_mass"])
-        states = [
-            body.state(ham.constants["central_mass"], ham.constants["G"]) for body in ham.bodies
-        ]
-        if ham.formulation == "canonical":
-            values = [v for x, _ in states for v in x]
-            values += [
-                scene_mpf(b.mass) * v
-                for b, (_, xp) in zip(ham.bodies, states, strict=True)
-                for v in xp
-            ]
-        else:
-            values = []
-            for k, (body, (x, xp)) in enumerate(zip(ham.bodies, states, strict=True)):
-                try:
-                    z = planets.hamilton_elements(x, xp, scene_mpf(t), scene_mpf(body.mass), M, G)
-                except ValueError as exc:  # the scene's checks refuse these first
-                    raise SceneError(f"hamiltonian.bodies[{k}]", str(exc)) from None
-                values += list(z.as_tuple())
-        return [mpmath.nstr(v, dps, strip_zeros=False) for v in values]
-
-
-def _start_time(scene: Scene) -> Number:
-    out = scene.output
-    return out.times[0] if out.times is not None else out.grid[0]
+    return rates, outputs, monitors
