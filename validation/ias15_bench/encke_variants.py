@@ -19,6 +19,7 @@ import numpy as np
 
 import cayley_heyoka.orbit.encke as encke_module
 import cayley_heyoka.orbit.model as orbit_model
+from cayley_heyoka.core import structures
 
 from .case import LD, exact_text
 
@@ -42,11 +43,12 @@ class KeplerClockEncke(encke_module.Encke):
     reset at each rectification: the state's last slot), instead of integrated. Everything
     else is the library's. The rectification event stays on τ (< 1)."""
 
-    def __init__(self, pars: Any, precision: Any, mu: Any, mu_value: Any) -> None:
-        super().__init__(pars, precision, mu, mu_value)
-        names = ("M0", "nu", "clock_rate", "tau_next", "T_hi", "T_lo")
-        self.extra = {k: pars.add(f"encke.{k}", "0") for k in names}
-        self.extra_index = {k: pars.index(f"encke.{k}") for k in names}
+    EXTRA = ("M0", "nu", "clock_rate", "tau_next", "T_hi", "T_lo")
+
+    def __init__(self, pars: Any, precision: Any, mu: Any, values: Any) -> None:
+        super().__init__(pars, precision, mu, values)
+        self.extra = {k: pars.add(f"encke.{k}", values[f"encke.{k}"]) for k in self.EXTRA}
+        self.extra_index = {k: pars.index(f"encke.{k}") for k in self.EXTRA}
 
     def phase(self, tau: Any) -> Any:
         q = self.extra
@@ -69,15 +71,15 @@ class KeplerClockEncke(encke_module.Encke):
     def anomaly(self, ta: Any, pars: Any) -> Any:
         return _kepler_ld(LD(float(pars[self.index["e"]])), self.phase_now(ta, pars))
 
-    def start(self, x: Any, v: Any) -> list[str]:
-        state = super().start(x, v)
-        values = self._pars.values
-        p = {k: LD(float(values[i])) for k, i in self.index.items()}
-        st = [LD(float(c)) for c in state]
-        extra = self._to_kepler_phase(p, st, (0.0, 0.0))
-        for k, value in extra.items():
-            values[self.extra_index[k]] = exact_text(value)
-        return [exact_text(float(c)) for c in st]
+    @classmethod
+    def start(cls, numbers: Any) -> Any:
+        """The library's start (its ellipse and (δ, ψ) among ``numbers``) moved to the phase."""
+        values = dict(numbers.values)
+        p = {k: LD(float(values[f"encke.{k}"])) for k in encke_module.PARAMETERS}
+        st = [LD(float(c)) for c in numbers.initial_state]
+        extra = cls._to_kepler_phase(p, st, (0.0, 0.0))
+        values |= {f"encke.{k}": exact_text(value) for k, value in extra.items()}
+        return type(numbers)([float(c) for c in st], values)
 
     def __call__(self, ta: Any, pars: Any) -> str | None:
         out = super().__call__(ta, pars)
@@ -90,7 +92,8 @@ class KeplerClockEncke(encke_module.Encke):
             ta.state[:] = [float(c) for c in st]
         return out
 
-    def _to_kepler_phase(self, p: dict, st: list, dtime: tuple) -> dict[str, float]:
+    @staticmethod
+    def _to_kepler_phase(p: dict, st: list, dtime: tuple) -> dict[str, float]:
         """From the library's rectified state (δ at E₀ = 2ψ₀): the phase M₀ rounded to double,
         δ moved to the anomaly kepE returns for it (in long double), τ = 0, and the clock."""
         e, E0 = p["e"], 2 * st[6]
@@ -155,10 +158,20 @@ def _kepler_ld(e: Any, M: Any) -> Any:
 
 @contextlib.contextmanager
 def encke_variant(cls: type) -> Any:
-    """Build ``formulation = "encke"`` scenes with ``cls`` for the Encke bookkeeping."""
-    saved = orbit_model.Encke
+    """Build ``formulation = "encke"`` scenes with ``cls`` for the Encke bookkeeping (the
+    structures built before and within are forgotten: each is built with its own class)."""
+    saved, numbers = orbit_model.Encke, orbit_model.variant_numbers
     orbit_model.Encke = cls
+    if hasattr(cls, "start"):
+
+        def moved(scene: Any, variant: Any) -> Any:
+            given = numbers(scene, variant)
+            return cls.start(given) if scene.model.formulation == "encke" else given
+
+        orbit_model.variant_numbers = moved
+    structures.clear()
     try:
         yield
     finally:
-        orbit_model.Encke = saved
+        orbit_model.Encke, orbit_model.variant_numbers = saved, numbers
+        structures.clear()
