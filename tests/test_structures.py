@@ -8,7 +8,7 @@ import copy
 
 import numpy as np
 import pytest
-from helpers import with_value
+from helpers import assert_second_scene_filled, runs_shared_and_alone, with_value, with_values
 
 import cayley_heyoka as ch
 from cayley_heyoka.core import structures
@@ -87,34 +87,9 @@ CASES = {
 }
 
 
-def _changed(doc: dict, changes: dict) -> dict:
-    for path, value in changes.items():
-        doc = with_value(doc, path, value)
-    return doc
-
-
-def _same_model(filled, built) -> None:
-    assert filled.code_key == built.code_key
-    assert filled.pars.names == built.pars.names
-    for name, a, b in zip(built.pars.names, built.pars.values, filled.pars.values, strict=True):
-        assert type(a) is type(b) and (a == b or (a != a and b != b)), name
-    for a, b in zip(built.initial_state, filled.initial_state, strict=True):
-        assert type(a) is type(b) and a == b
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_a_second_scene_of_a_structure_is_filled_with_its_own_numbers(case):
-    structures.clear()
-    base, changes = CASES[case]
-    first = ch.Scene.from_dict(copy.deepcopy(base))
-    second = ch.Scene.from_dict(_changed(base, changes))
-    assert structure_of(first) == structure_of(second) is not None
-    model_for(first)
-    filled = model_for(second)  # the structure's, with the second scene's numbers
-    _same_model(filled, FAMILIES["rotation"].build(second))
-    third = model_for(second)  # checked once; now filled without a full build
-    _same_model(third, filled)
-    assert third.system is filled.system  # the expressions are shared, not rebuilt
+    assert_second_scene_filled(*CASES[case])
 
 
 def test_numbers_compiled_in_name_another_structure():
@@ -149,7 +124,7 @@ def test_a_family_whose_numbers_disagree_with_its_build_is_an_error(monkeypatch)
 
     monkeypatch.setattr(type(family), "numbers", property(lambda self: off_by_one))
     with pytest.raises(RuntimeError, match="numbers disagree with its build.*'A'"):
-        model_for(ch.Scene.from_dict(_changed(base, changes)))
+        model_for(ch.Scene.from_dict(with_values(base, changes)))
 
 
 def test_members_of_one_structure_run_as_their_own_scenes():
@@ -161,12 +136,7 @@ def test_members_of_one_structure_run_as_their_own_scenes():
         with_value(base, ("initial", "rates"), rates)
         for rates in (["0.3", "1", "0.5"], ["-0.4", "0.2", "1.5"], ["1.1", "-0.3", "0.2"])
     ]
-    structures.clear()
-    shared = [ch.run(ch.Scene.from_dict(d)) for d in docs]
-    alone = []
-    for d in docs:
-        structures.clear()
-        alone.append(ch.run(ch.Scene.from_dict(d)))
+    shared, alone = runs_shared_and_alone(docs)
     for a, b in zip(shared, alone, strict=True):
         assert a.counters == b.counters and a.counters["rebasings"] > 0
         np.testing.assert_array_equal(a.variables["qw"], b.variables["qw"])

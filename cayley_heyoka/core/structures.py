@@ -18,8 +18,10 @@ difference.
 
 from __future__ import annotations
 
+import json
 import threading
 from collections import OrderedDict
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,6 +40,23 @@ class _Structure:
 
 _STRUCTURES: OrderedDict[tuple[str, str], _Structure] = OrderedDict()
 _LOCK = threading.Lock()
+
+
+#: What a family's ``structure`` writes in place of a number the model holds as a parameter.
+MASK = "#"
+
+
+def structure_text(scene: Any, tables: Mapping[str, Any]) -> str:
+    """A structure's name as a family's ``structure`` returns it: ``tables`` (the scene's
+    dictionary with the numbers the model holds as parameters or initial values replaced by
+    :data:`MASK`) without the output times, which are not compiled, and with the precision,
+    as canonical JSON."""
+    data = dict(tables)
+    output = dict(data.get("output", {}))
+    output.pop("times", None)
+    data["output"] = output
+    data["precision"] = scene.integrator.precision.name
+    return json.dumps(data, sort_keys=True, default=repr, ensure_ascii=True)
 
 
 def structure_of(scene: Any) -> str | None:

@@ -13,7 +13,6 @@ split is checked on them.
 
 from __future__ import annotations
 
-import json
 from fractions import Fraction
 from typing import Any
 
@@ -21,11 +20,11 @@ from ..core.errors import SceneError
 from ..core.model import Numbers, ParTable
 from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
+from ..core.structures import MASK as _MASK
+from ..core.structures import structure_text
 from .outputs import wants_principal_function
 from .predominant_mass import numbers as predominant_mass
 from .scene import Hamiltonian
-
-_MASK = "#"
 
 
 def structure(scene: Scene) -> str:
@@ -59,11 +58,7 @@ def structure(scene: Scene) -> str:
             k: [_MASK] * len(v) if isinstance(v, list | tuple) else _MASK
             for k, v in initial.items()
         }
-    output = dict(data.get("output", {}))
-    output.pop("times", None)
-    data["output"] = output
-    data["precision"] = scene.integrator.precision.name
-    return json.dumps(data, sort_keys=True, default=repr, ensure_ascii=True)
+    return structure_text(scene, data)
 
 
 def numbers(scene: Scene) -> Numbers:

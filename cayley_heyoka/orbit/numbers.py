@@ -15,7 +15,6 @@ variant a Cayley run starts in (from sin Φ at the start).
 
 from __future__ import annotations
 
-import json
 import threading
 import weakref
 from typing import Any
@@ -27,6 +26,8 @@ from ..core.errors import SceneError
 from ..core.model import Numbers
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
+from ..core.structures import MASK as _MASK
+from ..core.structures import structure_text
 from ..mechanics import frames
 from ..mechanics import kepler as el
 from . import encke, revolutions
@@ -36,7 +37,6 @@ from .tilt import FRAME, LEVEL, TILTED, angles_in
 
 #: Digits beyond the run's precision of every number computed in mpmath.
 GUARD_DIGITS = 15
-_MASK = "#"
 #: Formulations whose ρ sheds its whole revolutions (:mod:`.revolutions`).
 _TURNING = ("cayley", "quaternion")
 
@@ -75,12 +75,8 @@ def structure(scene: Scene) -> str:
             "phi_rate": _zero_or_mask(plane.phi_rate),
             "sigma_rate": sigma_rate,
         }
-    output = dict(data.get("output", {}))
-    output.pop("times", None)
-    data["output"] = output
-    data["precision"] = scene.integrator.precision.name
     data["variant"] = start_variant(scene)
-    return json.dumps(data, sort_keys=True, default=repr, ensure_ascii=True)
+    return structure_text(scene, data)
 
 
 def _zero_or_mask(value: Any) -> str:

@@ -12,7 +12,6 @@ build compiles: the scene with its numbers masked, except the numbers that are c
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
@@ -21,6 +20,8 @@ from ..core.errors import SceneError
 from ..core.model import Numbers
 from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
+from ..core.structures import MASK as _MASK
+from ..core.structures import structure_text
 from . import attitude as att
 from . import azimuth, invariable_angle, poisson
 from . import equations as eq
@@ -34,7 +35,6 @@ _FORCE_NUMBERS = {
     "gravity_gradient": ("gm", "distance", "direction"),
 }
 _REDUCED_FORCE_NUMBERS = {"heavy_top": ("weight", "center_of_mass"), "gravity_gradient": ("gm",)}
-_MASK = "#"
 
 
 def structure(scene: Scene) -> str:
@@ -61,11 +61,7 @@ def structure(scene: Scene) -> str:
         if key in forces:
             forces[key] = {k: (_MASK if k in fields else v) for k, v in forces[key].items()}
     data["forces"] = forces
-    output = dict(data.get("output", {}))
-    output.pop("times", None)
-    data["output"] = output
-    data["precision"] = scene.integrator.precision.name
-    return json.dumps(data, sort_keys=True, default=repr, ensure_ascii=True)
+    return structure_text(scene, data)
 
 
 def numbers(scene: Scene) -> Numbers:

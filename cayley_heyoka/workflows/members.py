@@ -171,18 +171,9 @@ def reason(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def _record(
-    part: Chunk,
-    row: int,
-    layout: Layout,
-    prec: Precision,
-    values: Mapping[str, np.ndarray],
-    conserved: Sequence[str],
-    complete: bool,
-) -> None:
-    """Fill one member's drifts and final values from its outputs and monitors."""
-    block = {k: np.asarray(v)[None] for k, v in values.items()}
-    _record_block(part, np.array([row]), layout, prec, block, conserved, complete)
+def _one(values: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """One member's outputs and monitors as a block of one (:func:`_record_block`)."""
+    return {k: np.asarray(v)[None] for k, v in values.items()}
 
 
 def _record_block(
@@ -253,7 +244,9 @@ def _run_group(
             log = result.events.get(name)
             part.events[name][row] = len(log) if log is not None else 0
         values = {**result.variables, **result.monitors}
-        _record(part, row, layout, prec, values, model.conserved, result.success)
+        _record_block(
+            part, np.array([row]), layout, prec, _one(values), model.conserved, result.success
+        )
 
     with ThreadPoolExecutor(max_workers=max(1, min(threads, len(group)))) as pool:
         list(pool.map(one, group))
@@ -324,7 +317,7 @@ def _lanes_group(
             values = {n: v[:k] for n, v in values.items()}
         _lane_counts(part, row, layout, run)
         part.status[row] = OK if complete else FAILED
-        _record(part, row, layout, prec, values, model.conserved, complete)
+        _record_block(part, np.array([row]), layout, prec, _one(values), model.conserved, complete)
     return len(handed)
 
 
@@ -438,4 +431,4 @@ def _ensemble_group(
             k, part.message[row] = bad
             part.status[row], complete = FAILED, False
             values = {n: v[:k] for n, v in values.items()}
-        _record(part, row, layout, prec, values, model.conserved, complete)
+        _record_block(part, np.array([row]), layout, prec, _one(values), model.conserved, complete)

@@ -9,7 +9,12 @@ import copy
 
 import numpy as np
 import pytest
-from helpers import with_value
+from helpers import (
+    ANHARMONIC_SPLIT,
+    assert_second_scene_filled,
+    runs_shared_and_alone,
+    with_value,
+)
 
 import cayley_heyoka as ch
 from cayley_heyoka.core import structures
@@ -24,15 +29,7 @@ PROJECTILE = {
     "output": {"times": TIMES, "principal_function": True},
 }
 ANHARMONIC = {
-    "hamiltonian": {
-        "H1": "(varpi1**2 + eta1**2)/2",
-        "H2": "0.05*eta1**4",
-        "formulation": "elements",
-        "flow": {
-            "eta1": "chi1*cos(t) + lambda1*sin(t)",
-            "varpi1": "lambda1*cos(t) - chi1*sin(t)",
-        },
-    },
+    "hamiltonian": copy.deepcopy(ANHARMONIC_SPLIT),
     "initial": {"eta": ["0.8"], "varpi": ["-0.3"]},
     "output": {"times": TIMES},
 }
@@ -168,42 +165,9 @@ CASES = {
 }
 
 
-def _changed(doc: dict, changes: dict) -> dict:
-    for path, value in changes.items():
-        doc = with_value(doc, path, value)
-    return doc
-
-
-def _same_model(filled, built) -> None:
-    assert filled.code_key == built.code_key
-    assert filled.pars.names == built.pars.names
-    for name, a, b in zip(built.pars.names, built.pars.values, filled.pars.values, strict=True):
-        assert type(a) is type(b) and (a == b or (a != a and b != b)), name
-    assert len(filled.initial_state) == len(built.initial_state)
-    for a, b in zip(built.initial_state, filled.initial_state, strict=True):
-        assert type(a) is type(b) and a == b
-    assert filled.compact == built.compact and filled.conserved == built.conserved
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_a_second_scene_of_a_structure_is_filled_with_its_own_numbers(case):
-    structures.clear()
-    base, changes = CASES[case]
-    first = ch.Scene.from_dict(copy.deepcopy(base))
-    second = ch.Scene.from_dict(_changed(base, changes))
-    assert structure_of(first) == structure_of(second) is not None
-    built_first = model_for(first)
-    filled = model_for(second)  # checked against its full build by model_for
-    built = FAMILIES["hamiltonian"].build(second)
-    _same_model(filled, built)
-    third = model_for(second)  # now filled without a full build
-    _same_model(third, filled)
-    assert third.system is built_first.system  # the expressions are shared, not rebuilt
-    # The numbers did change: a filled model that kept the first scene's would pass the above
-    # only if the changes changed nothing.
-    assert list(built.initial_state) != list(built_first.initial_state) or (
-        built.pars.values != built_first.pars.values
-    )
+    assert_second_scene_filled(*CASES[case])
 
 
 #: Scenes whose structures must differ from the case's first scene: what is not masked.
@@ -332,12 +296,7 @@ MEMBERS = {
 def test_members_of_one_structure_run_as_their_own_scenes(case):
     base, path, values, names, event = MEMBERS[case]
     docs = [with_value(base, path, v) for v in values]
-    structures.clear()
-    shared = [ch.run(ch.Scene.from_dict(copy.deepcopy(d))) for d in docs]
-    alone = []
-    for d in docs:
-        structures.clear()
-        alone.append(ch.run(ch.Scene.from_dict(copy.deepcopy(d))))
+    shared, alone = runs_shared_and_alone(docs)
     for a, b in zip(shared, alone, strict=True):
         assert a.counters == b.counters
         for name in names:

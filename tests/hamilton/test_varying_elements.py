@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import copy
+
 import heyoka as hy
 import mpmath
 import numpy as np
 import pytest
+from helpers import ANHARMONIC_SPLIT
 
 from cayley_heyoka import Scene, SceneError, run
 from cayley_heyoka.hamilton.elements import lagrange_brackets
@@ -68,15 +71,7 @@ def test_elements_and_canonical_formulations_agree():
 
 
 ANHARMONIC = {
-    "hamiltonian": {
-        "H1": "(varpi1**2 + eta1**2)/2",
-        "H2": "0.05*eta1**4",
-        "formulation": "elements",
-        "flow": {
-            "eta1": "chi1*cos(t) + lambda1*sin(t)",
-            "varpi1": "lambda1*cos(t) - chi1*sin(t)",
-        },
-    },
+    "hamiltonian": copy.deepcopy(ANHARMONIC_SPLIT),
     "initial": {"eta": ["0.8"], "varpi": ["-0.3"]},
     "output": {"times": {"start": "0", "stop": "30", "count": 31}},
 }

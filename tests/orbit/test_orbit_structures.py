@@ -10,7 +10,13 @@ import copy
 
 import numpy as np
 import pytest
-from helpers import with_value
+from helpers import (
+    assert_same_model,
+    assert_second_scene_filled,
+    runs_shared_and_alone,
+    with_value,
+    with_values,
+)
 
 import cayley_heyoka as ch
 from cayley_heyoka.core import structures
@@ -139,46 +145,9 @@ CASES = {
 }  # fmt: skip
 
 
-def _changed(doc: dict, changes: dict) -> dict:
-    for path, value in changes.items():
-        if path[-1] not in _at(doc, path[:-1]):
-            doc = with_value(doc, path[:-1], {**_at(doc, path[:-1]), path[-1]: value})
-        else:
-            doc = with_value(doc, path, value)
-    return doc
-
-
-def _at(doc: dict, path: tuple) -> dict:
-    for key in path:
-        doc = doc[key]
-    return doc
-
-
-def _same_model(filled, built) -> None:
-    assert filled.code_key == built.code_key
-    assert filled.pars.names == built.pars.names
-    for name, a, b in zip(built.pars.names, built.pars.values, filled.pars.values, strict=True):
-        assert type(a) is type(b) and (a == b or (a != a and b != b)), name
-    for a, b in zip(built.initial_state, filled.initial_state, strict=True):
-        assert type(a) is type(b) and a == b
-    assert filled.variant == built.variant
-    assert filled.conserved == built.conserved and filled.initial_fields == built.initial_fields
-    assert [t.counter for t in filled.terminal] == [t.counter for t in built.terminal]
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_a_second_orbit_of_a_structure_is_filled_with_its_own_numbers(case):
-    structures.clear()
-    base, changes = CASES[case]
-    first = ch.Scene.from_dict(copy.deepcopy(base))
-    second = ch.Scene.from_dict(_changed(base, changes))
-    assert structure_of(first) == structure_of(second) is not None
-    model_for(first)
-    filled = model_for(second)  # checked against its full build by model_for, once
-    _same_model(filled, FAMILIES["orbit"].build(second))
-    third = model_for(second)
-    _same_model(third, filled)
-    assert third.system is filled.system
+    assert_second_scene_filled(*CASES[case])
 
 
 def test_the_variants_of_a_cayley_structure_are_its_own():
@@ -186,7 +155,7 @@ def test_the_variants_of_a_cayley_structure_are_its_own():
     structures.clear()
     base, changes = CASES["cayley level, turning plane, events"]
     model_for(ch.Scene.from_dict(copy.deepcopy(base)))
-    second = ch.Scene.from_dict(_changed(base, changes))
+    second = ch.Scene.from_dict(with_values(base, changes))
     filled, built = model_for(second), FAMILIES["orbit"].build(second)
     assert filled.variant == tilt.LEVEL
     other, own = filled.variants(tilt.TILTED), built.variants(tilt.TILTED)
@@ -227,30 +196,19 @@ def test_numbers_that_decide_a_term_name_another_structure(case, path, value):
     structures.clear()
     base, _ = CASES[case]
     a = ch.Scene.from_dict(copy.deepcopy(base))
-    b = ch.Scene.from_dict(_changed(base, {path: value}))
+    b = ch.Scene.from_dict(with_values(base, {path: value}))
     assert structure_of(a) != structure_of(b)
     model_for(a)
-    _same_model(model_for(b), FAMILIES["orbit"].build(b))
+    assert_same_model(model_for(b), FAMILIES["orbit"].build(b))
 
 
 def test_an_encke_start_the_precision_cannot_hold_is_refused_by_field():
     structures.clear()
     base, _ = CASES["encke, J2 along -x"]
     model_for(ch.Scene.from_dict(copy.deepcopy(base)))
-    radial = _changed(base, {("orbit", "elements", "e"): "0.99999999999999999999"})
+    radial = with_values(base, {("orbit", "elements", "e"): "0.99999999999999999999"})
     with pytest.raises(ch.SceneError, match="orbit.elements.*eccentricity rounds to 1"):
         model_for(ch.Scene.from_dict(radial))
-
-
-def _runs(docs: list[dict]) -> tuple[list[ch.Result], list[ch.Result]]:
-    """The scenes run one after the other through their shared structure, and each alone."""
-    structures.clear()
-    shared = [ch.run(ch.Scene.from_dict(copy.deepcopy(d))) for d in docs]
-    alone = []
-    for d in docs:
-        structures.clear()
-        alone.append(ch.run(ch.Scene.from_dict(copy.deepcopy(d))))
-    return shared, alone
 
 
 def _identical(a: ch.Result, b: ch.Result) -> None:
@@ -279,9 +237,9 @@ def test_cayley_members_of_one_structure_run_as_alone_through_revolutions_and_ha
     docs = [
         PASSAGE,
         with_value(PASSAGE, ("orbit", "elements", "mean_anomaly"), "3"),
-        _changed(PASSAGE, {("orbit", "elements", "inclination"): "0.6", ("orbit", "mu"): "1.2"}),
+        with_values(PASSAGE, {("orbit", "elements", "inclination"): "0.6", ("orbit", "mu"): "1.2"}),
     ]
-    shared, alone = _runs(docs)
+    shared, alone = runs_shared_and_alone(docs)
     for a, b in zip(shared, alone, strict=True):
         _identical(a, b)
         assert a.counters["revolutions"] > 0 and a.counters["equatorial_handovers"] == 2
@@ -294,7 +252,7 @@ def test_quaternion_members_in_multiprecision_run_as_alone():
     base = orbit("quaternion", integrator={"precision": {"bits": 128}})
     base["output"]["times"] = {"start": "0", "stop": "7", "count": 3}
     docs = [base, with_value(base, ("orbit", "elements", "mean_anomaly"), "4")]
-    shared, alone = _runs(docs)
+    shared, alone = runs_shared_and_alone(docs)
     for a, b in zip(shared, alone, strict=True):
         _identical(a, b)
         assert a.counters["revolutions"] > 0
@@ -306,8 +264,8 @@ def test_encke_members_of_one_structure_run_as_alone_through_rectifications(prec
     # another ellipse.
     base = orbit("encke", integrator={"precision": precision})
     base["output"] = {"times": {"start": "0", "stop": "14", "count": 3}, "events": ["apsis"]}
-    docs = [base, _changed(base, {("orbit", "mu"): "1.5", ("orbit", "elements", "e"): "0.4"})]
-    shared, alone = _runs(docs)
+    docs = [base, with_values(base, {("orbit", "mu"): "1.5", ("orbit", "elements", "e"): "0.4"})]
+    shared, alone = runs_shared_and_alone(docs)
     for a, b in zip(shared, alone, strict=True):
         _identical(a, b)
         assert a.counters["rectifications"] >= 2
