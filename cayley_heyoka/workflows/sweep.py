@@ -48,13 +48,36 @@ _KEEP_SCENES = 2**16
 Progress = Callable[[int, int], None]
 
 
+#: Members tried for the file's columns before a study whose models cannot be built is refused.
+LAYOUT_TRIES = 64
+
+
 def layout_of(study: Study) -> Layout:
-    """The file's columns, from the first member's model."""
+    """The file's columns, from the first member whose model builds (among the first
+    :data:`LAYOUT_TRIES`: a member whose numbers its model refuses — a body at rest with
+    invariable-plane events — fails alone, wherever it stands in the study).
+
+    Raises
+    ------
+    SceneError
+        No member among those has a model: the first one's refusal, naming the member.
+    """
+    from ..core.errors import SceneError
     from ..core.scene import check_units
     from ..core.structures import model_for
 
-    scene = study.member_scene(0, study.members()[0])
-    model = model_for(scene)
+    first: SceneError | None = None
+    for index, values in enumerate(study.members()[:LAYOUT_TRIES]):
+        scene = study.member_scene(index, values)
+        try:
+            model = model_for(scene)
+            break
+        except SceneError as exc:
+            if first is None:
+                where = f"member {index} ({study.describe(values)}): {exc.field}"
+                first = SceneError(where, exc.constraint)
+    else:
+        raise first if first is not None else SceneError("sweep", "has no member")
     check_units(scene, [*model.outputs, *model.monitors])
     events = tuple(dict.fromkeys(e.name for e in model.events))
     grid = scene.time_grid
