@@ -91,6 +91,12 @@ class Family:
         expressions, events and handlers; None: not offered for this scene), and
         ``numbers(scene) -> Numbers`` (:class:`~.model.Numbers`) the values ``build`` gives
         its state and parameters, without building an expression. Both or neither.
+    table
+        ``(scene, model, fields, values, exact) -> Table | None`` (:func:`.structures.table_for`):
+        the numbers of many scenes that are ``scene`` (whose model is ``model``) with other
+        double ``values`` (``(scenes, fields)``; ``exact``: each is its scene's number exactly)
+        at the scene paths ``fields``, as arrays rounded as ``numbers`` rounds; rows it cannot
+        vouch for marked suspect; None where it offers none for these fields. Optional.
     """
 
     name: str
@@ -112,6 +118,7 @@ class Family:
     with_formulation: Callable[[Any, str], dict[str, Any]] | None = None
     structure: Callable[[Any], str | None] | None = None
     numbers: Callable[[Any], Any] | None = None
+    table: Callable[..., Any] | None = None
 
     def formulation_of(self, scene: Any) -> str | None:
         """The formulation ``scene`` is written in (None: the family offers no other)."""
@@ -207,6 +214,7 @@ _HOOKS = (
     "variables",
     "structure",
     "numbers",
+    "table",
 )
 
 

@@ -49,7 +49,8 @@ NUMBER_KINDS = (
 )
 
 _MIN_BITS = 64
-_SMALLEST_NORMAL = float(np.finfo(float).tiny)
+#: Double's smallest normal number: below it a double keeps fewer than its 53 bits.
+SMALLEST_NORMAL = float(np.finfo(float).tiny)
 #: Most significand bits of ``{bits = N}`` (docs/scenes.md, "Numbers"). heyoka's Taylor order
 #: grows with the bits and the compile time faster (one time unit of a free body: 3.4 s at 1024
 #: bits, 39 s at 2048); and the round-off scales of the checks use :attr:`Precision.epsilon`
@@ -220,12 +221,12 @@ class Precision:
             x = self.number(value)
         except SceneError as exc:
             raise SceneError(where, exc.constraint) from None
-        if self.kind == "double" and x != 0 and abs(x) < _SMALLEST_NORMAL:
-            kept = max(1, 53 - (math.frexp(_SMALLEST_NORMAL)[1] - math.frexp(abs(x))[1]))
+        if self.kind == "double" and x != 0 and abs(x) < SMALLEST_NORMAL:
+            kept = max(1, 53 - (math.frexp(SMALLEST_NORMAL)[1] - math.frexp(abs(x))[1]))
             raise SceneError(
                 where,
                 f"{shown(value)} is below double's smallest normal number "
-                f"({_SMALLEST_NORMAL!r}): a double keeps only {kept} of its 53 bits there; "
+                f"({SMALLEST_NORMAL!r}): a double keeps only {kept} of its 53 bits there; "
                 "choose quad or rescale the problem",
             )
         return x

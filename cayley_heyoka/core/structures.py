@@ -14,6 +14,14 @@ The second scene of every structure is also built in full and compared with its 
 — the compiled code's key, the initial state and every parameter value, exactly — so that a
 family's ``numbers`` that disagrees with its ``build`` is an error on first use, not a silent
 difference.
+
+Many scenes of one structure at once (a sweep's members, in double precision) need not be
+scenes at all: :func:`table_for` asks the family for the numbers of all of them as arrays
+(``Family.table``), computed from the values that differ (a member's swept fields) with
+vectorised arithmetic that rounds as ``numbers`` does. Members whose values the table cannot
+vouch for — a value double cannot hold, a body near the edge of a constraint — come back as
+*suspects*, to be validated and built one by one, so that the table never accepts what a
+scene would refuse; its rows are checked against two members built in full.
 """
 
 from __future__ import annotations
@@ -21,12 +29,15 @@ from __future__ import annotations
 import json
 import threading
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from .families import FAMILIES
 from .model import Model, Numbers
+from .precision import SMALLEST_NORMAL, exact_fraction
 
 #: Structures kept (least recently used dropped first).
 HELD = 64
@@ -144,3 +155,124 @@ def _same(a: Any, b: Any) -> bool:
     except (TypeError, ValueError):
         return False
     return equal or (a != a and b != b)  # NaN is NaN
+
+
+# ---------------------------------------------------------------------- many at once
+@dataclass(frozen=True)
+class Table:
+    """The numbers of many scenes of one structure (double precision), row by row.
+
+    Attributes
+    ----------
+    initial
+        ``(scenes, len(model.system))``: each scene's initial state.
+    pars
+        ``(scenes, len(model.pars))``: each scene's whole parameter vector.
+    suspect
+        ``(scenes,)``: rows the table does not vouch for (their other columns are
+        meaningless): validate and build those scenes one by one.
+    """
+
+    initial: np.ndarray
+    pars: np.ndarray
+    suspect: np.ndarray
+
+
+def doubles(values: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scenes' numbers (``(scenes, fields)``: ints, floats, decimal text or fractions) as
+    doubles, correctly rounded as a scene holds them; with whether each is that double exactly,
+    and whether double holds it (finite, and zero or a normal number: :meth:`.Precision.hold`).
+    """
+    try:
+        x = np.array(values, dtype=np.float64, ndmin=2)
+    except (OverflowError, ValueError, TypeError):
+        x = None
+    if x is not None and all(type(v) is float for row in values for v in row):
+        exact = np.ones(x.shape, dtype=bool)  # a float is its own double
+    else:
+        rows = [[_double(v) for v in row] for row in values]
+        x = np.array([[d for d, _ in row] for row in rows], dtype=np.float64, ndmin=2)
+        exact = np.array([[e for _, e in row] for row in rows], dtype=bool, ndmin=2)
+    held = np.isfinite(x) & ((x == 0) | (np.abs(x) >= SMALLEST_NORMAL)) & ((x != 0) | exact)
+    return x, exact, held
+
+
+def _double(value: Any) -> tuple[float, bool]:
+    try:
+        f = exact_fraction(value)
+    except (ValueError, OverflowError, TypeError):
+        return float("nan"), False
+    try:
+        x = f.numerator / f.denominator  # correctly rounded
+    except OverflowError:
+        return float("inf"), False
+    return x, exact_fraction(x) == f
+
+
+def table_for(
+    scene: Any,
+    model: Model,
+    fields: Sequence[tuple[str | int, ...]],
+    values: Any,
+    scene_of: Callable[[int], Any],
+) -> Table | None:
+    """The numbers of scenes that are ``scene`` with other ``values`` at ``fields``, as arrays.
+
+    Parameters
+    ----------
+    scene, model
+        One of the scenes (validated) and its model (:func:`model_for`).
+    fields
+        The scene paths that differ, e.g. ``("initial", "rates", 0)``.
+    values
+        ``(scenes, fields)``: each scene's numbers at ``fields``.
+    scene_of
+        The validated scene of row ``k`` (to check the table's rows against full builds).
+
+    Returns
+    -------
+    Table or None
+        None where the family offers no table for these fields (or not in this precision):
+        build the scenes one by one.
+
+    Raises
+    ------
+    RuntimeError
+        The family's table disagrees with its ``numbers`` (a fault of the family).
+    """
+    family = FAMILIES[scene.family]
+    if family.table is None or scene.integrator.precision.kind != "double":
+        return None
+    if structure_of(scene) is None:
+        return None
+    x, exact, held = doubles(values)
+    table = family.table(scene, model, tuple(fields), x, exact)
+    if table is None:
+        return None
+    suspect = table.suspect | ~held.all(axis=1)
+    table = Table(table.initial, table.pars, suspect)
+    trusted = np.flatnonzero(~suspect)
+    for k in dict.fromkeys(trusted[[0, -1]].tolist() if len(trusted) else ()):
+        built = model_for(scene_of(k))
+        _check_row(family.name, built, table, k)
+    return table
+
+
+def _check_row(family: str, built: Model, table: Table, k: int) -> None:
+    """Row ``k`` of ``table`` holds the numbers of ``built`` (its scene built in full), bit for
+    bit."""
+    initial = np.asarray(built.initial_state, dtype=np.float64)
+    pars = np.asarray(built.pars.values, dtype=np.float64)
+    problems = [
+        f"{what} {names[i]}: {got[i]!r} for {want[i]!r}"
+        for what, names, got, want in (
+            ("initial", built.state_names, table.initial[k], initial),
+            ("parameter", built.pars.names, table.pars[k], pars),
+        )
+        for i in np.flatnonzero(got.view(np.int64) != want.view(np.int64))
+    ]
+    if problems:
+        raise RuntimeError(
+            f"the {family} family's table disagrees with its numbers for row {k}: "
+            f"{'; '.join(problems[:5])} (a fault of the family)"
+        )

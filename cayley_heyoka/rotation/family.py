@@ -31,4 +31,5 @@ FAMILY = Family(
     memoirs=("cayley1843", "cayley1846", "euler1758"),
     structure=later("cayley_heyoka.rotation.numbers", "structure"),
     numbers=later("cayley_heyoka.rotation.numbers", "numbers"),
+    table=later("cayley_heyoka.rotation.numbers", "table"),
 )

@@ -21,7 +21,7 @@ from ..core.model import Numbers
 from ..core.precision import exact_fraction, fraction_text
 from ..core.scene import Scene
 from ..core.structures import MASK as _MASK
-from ..core.structures import structure_text
+from ..core.structures import Table, structure_text
 from . import attitude as att
 from . import azimuth, invariable_angle, poisson
 from . import equations as eq
@@ -44,9 +44,10 @@ def structure(scene: Scene) -> str:
     Examples
     --------
     >>> import cayley_heyoka as ch
-    >>> a = ch.Scene.from_dict({"body": {"inertia": [1, 2, 3]}, "initial": {"rates": [1, 0, 0]}})
-    >>> b = ch.Scene.from_dict({"body": {"inertia": [2, 2, 3]}, "initial": {"rates": [0, 1, 0]}})
-    >>> structure(a) == structure(b)
+    >>> times = {"times": [0, 1]}
+    >>> a = {"body": {"inertia": [1, 2, 3]}, "initial": {"rates": [1, 0, 0]}, "output": times}
+    >>> b = {"body": {"inertia": [2, 2, 3]}, "initial": {"rates": [0, 1, 0]}, "output": times}
+    >>> structure(ch.Scene.from_dict(a)) == structure(ch.Scene.from_dict(b))
     True
     """
     data = {k: v for k, v in scene.source.items()}
@@ -130,3 +131,91 @@ def numbers(scene: Scene) -> Numbers:
         values |= invariable_angle.values(prec, exact_inertia, rates)
         initial.append(prec.number(0))
     return Numbers(initial, values)
+
+
+#: The scene fields :func:`table` computes from, and the first state index or moment each sets.
+_RATES = {("initial", "rates", i): i for i in range(3)}
+_MOMENTS = {("body", "inertia", i): i for i in range(3)}
+
+
+def table(
+    scene: Scene,
+    model: Any,
+    fields: tuple[tuple[str | int, ...], ...],
+    x: np.ndarray,
+    exact: np.ndarray,
+) -> Table | None:
+    """The numbers of rigid bodies that are ``scene`` with other rates or moments, as arrays
+    (double precision; :func:`cayley_heyoka.core.structures.table_for`).
+
+    ``x`` holds each body's numbers at ``fields`` (``initial.rates[i]``, ``body.inertia[i]``:
+    None for any other field, or where Ψ or the azimuth is wanted), ``exact`` whether each is
+    the scene's number exactly. Every value is computed in the operations, and their order,
+    that :func:`numbers` takes: a product or difference of two doubles is correctly rounded in
+    numpy as in Python, so the rows are :func:`numbers`' bit for bit (``table_for`` checks two).
+    A body whose moments are not exact doubles or lie within rounding of the triangle
+    inequality, or at rest with invariable-plane events, is a suspect: built alone.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import cayley_heyoka as ch
+    >>> from cayley_heyoka.core.structures import model_for
+    >>> data = {"body": {"inertia": [1, 2, 2.5]}, "initial": {"rates": [1, 0, 0]},
+    ...         "output": {"times": [0, 1]}}
+    >>> scene = ch.Scene.from_dict(data)
+    >>> rates = np.array([[0.5], [2.0]])
+    >>> t = table(scene, model_for(scene), (("initial", "rates", 1),), rates, rates == rates)
+    >>> t.initial[:, :3].tolist()
+    [[1.0, 0.5, 0.0], [1.0, 2.0, 0.0]]
+    """
+    body: RigidBody = scene.model
+    if any(f not in _RATES and f not in _MOMENTS for f in fields):
+        return None
+    options = scene.output.options
+    if azimuth.wanted(options, body.formulation) or invariable_angle.wanted(options):
+        return None
+    prec = scene.integrator.precision
+    moments = [float(prec.number(m)) for m in body.inertia]
+    swept = any(f in _MOMENTS for f in fields)
+    if swept and any(
+        exact_fraction(d) != exact_fraction(m) for d, m in zip(moments, body.inertia, strict=True)
+    ):
+        return None  # a difference with a moment written in decimals is not of doubles
+    n = len(x)
+    names = model.pars.names
+    initial = np.repeat(np.asarray(model.initial_state, dtype=np.float64)[None], n, axis=0)
+    pars = np.repeat(np.asarray(model.pars.values, dtype=np.float64)[None], n, axis=0)
+    suspect = np.zeros(n, dtype=bool)
+    rates = [initial[:, i].copy() for i in range(3)]
+    columns = [np.full(n, m) for m in moments]
+    for j, f in enumerate(fields):
+        if f in _RATES:
+            rates[_RATES[f]] = initial[:, _RATES[f]] = x[:, j]
+        else:
+            columns[_MOMENTS[f]] = x[:, j]
+            suspect |= ~exact[:, j]
+    values: dict[str, Any] = {}
+    with np.errstate(all="ignore"):  # a value double cannot hold is a suspect already
+        if swept:
+            A, B, C = columns
+            # The scene's checks are exact; within a few roundings of their edge, it decides.
+            edge = 8 * np.finfo(np.float64).eps * np.maximum(np.maximum(A, B), C)
+            suspect |= (A <= 0) | (B <= 0) | (C <= 0)
+            suspect |= (A + B - C <= edge) | (B + C - A <= edge) | (C + A - B <= edge)
+            values |= {"A": A, "B": B, "C": C, "B-C": B - C, "C-A": C - A, "A-B": A - B}
+        if "invariable_plane" in scene.output.events and body.torque_free:
+            suspect |= (rates[0] == 0) & (rates[1] == 0) & (rates[2] == 0)
+            q0 = body.initial_quaternion(prec)
+            L0 = [m * w for m, w in zip(columns, rates, strict=True)]
+            momentum = att.matvec(att.quaternion_to_matrix(list(q0)), L0)
+            if body.formulation == "rodrigues":
+                base = [pars[0, names.index(f"chart.base[{i}]")] for i in range(4)]
+                chart = RodriguesAtlas.values_of(base, momentum)
+                values |= {k: v for k, v in chart.items() if not k.startswith("chart.base")}
+            else:
+                values |= {f"momentum_space[{i}]": momentum[i] for i in range(3)}
+        for name, column in values.items():
+            pars[:, names.index(name)] = column
+        suspect |= ~(np.isfinite(initial).all(axis=1) & np.isfinite(pars).all(axis=1))
+    return Table(initial, pars, suspect)

@@ -20,7 +20,8 @@ The local backend (:func:`cayley_heyoka.workflows.sweep.run_sweep`) and the Dask
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -81,8 +82,74 @@ def propagate_members(
     return integrate_members(prepared, layout, study.precision, threads)
 
 
-#: A chunk's rows and its members grouped by compiled structure: (row, scene, model).
-Prepared = tuple[Chunk, dict[str, list[tuple[int, Scene, Any]]]]
+@dataclass
+class Entry:
+    """A member of a :class:`Group`: its row in the chunk, its numbers (initial state and whole
+    parameter vector, in the study's precision) and its validated scene, made when asked for
+    (a member integrated by ``run()``)."""
+
+    row: int
+    initial: Sequence[Any]
+    pars: Sequence[Any]
+    scene: Callable[[], Scene]
+
+
+@dataclass
+class Group:
+    """Members sharing compiled code: the first one's scene and model (the structure, the
+    options, the output times) and every member's numbers."""
+
+    scene: Scene
+    model: Any
+    entries: list[Entry] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+
+#: A chunk's rows and its members grouped by compiled structure.
+Prepared = tuple[Chunk, dict[str, Group]]
+
+
+#: Members tried, in order, for the one whose scene and model the table starts from.
+TEMPLATE_TRIES = 8
+
+
+@dataclass(frozen=True)
+class Tabled:
+    """Members of one structure whose numbers its family computed at once
+    (:func:`cayley_heyoka.core.structures.table_for`): the scene and model of the first member
+    that has one, and the table (a suspect row is validated and built alone)."""
+
+    scene: Scene
+    model: Any
+    table: Any
+
+
+def tabulate(study: Study, members: Sequence[Member]) -> Tabled | None:
+    """The members' numbers as arrays, where their family computes them at once (double
+    precision, swept fields it knows); None: validate and build each member."""
+    from ..core.structures import model_for, table_for
+
+    if study.precision.kind != "double":
+        return None
+    for member in members[:TEMPLATE_TRIES]:
+        try:
+            scene = study.member_scene(*member)
+            model = model_for(scene)
+            break
+        except Exception:  # that member alone says why, as it would without a table
+            continue
+    else:
+        return None
+    table = table_for(
+        scene,
+        model,
+        [p.path for p in study.parameters],
+        [values for _, values in members],
+        lambda k: study.member_scene(*members[k]),
+    )
+    return None if table is None else Tabled(scene, model, table)
 
 
 def prepare_members(
@@ -91,8 +158,9 @@ def prepare_members(
     layout: Layout,
     scenes: Sequence[Scene] | None = None,
 ) -> Prepared:
-    """The first half of :func:`propagate_members`: each member's scene and model, grouped by
-    compiled structure (Python work, run while the previous chunk integrates)."""
+    """The first half of :func:`propagate_members`: each member's numbers, grouped by compiled
+    structure (Python work, run while the previous chunk integrates) — from its family's table
+    where it has one (:func:`tabulate`), else from the member's scene and model."""
     from ..core.structures import model_for
 
     prec = study.precision
@@ -106,16 +174,38 @@ def prepare_members(
         final=nan_final(n, len(layout.final), prec),
         events={k: np.zeros(n, dtype=np.int64) for k in layout.events},
     )
-    groups: dict[str, list[tuple[int, Scene, Any]]] = {}
-    for row, (index, values) in enumerate(members):
+    groups: dict[str, Group] = {}
+    alone = range(n)
+    tabled = tabulate(study, members)
+    if tabled is not None:
+        table = tabled.table
+        group = groups[_group_key(tabled.model, tabled.scene)] = Group(tabled.scene, tabled.model)
+        for row in np.flatnonzero(~table.suspect).tolist():
+            member = members[row]
+            group.entries.append(
+                Entry(row, table.initial[row], table.pars[row], _later(study, member))
+            )
+        alone = np.flatnonzero(table.suspect).tolist()
+    for row in alone:
+        index, values = members[row]
         try:
             scene = scenes[row] if scenes is not None else study.member_scene(index, values)
             model = model_for(scene)
         except Exception as exc:  # one member's bad numbers must not end the sweep
             part.message[row] = reason(exc)
             continue
-        groups.setdefault(_group_key(model, scene), []).append((row, scene, model))
+        key = _group_key(model, scene)
+        if key not in groups:
+            groups[key] = Group(scene, model)
+        entry = Entry(row, model.initial_state, model.pars.values, lambda scene=scene: scene)
+        groups[key].entries.append(entry)
+    for group in groups.values():
+        group.entries.sort(key=lambda e: e.row)
     return part, groups
+
+
+def _later(study: Study, member: Member) -> Callable[[], Scene]:
+    return lambda: study.member_scene(*member)
 
 
 def integrate_members(
@@ -133,7 +223,7 @@ def integrate_members(
     """
     part, groups = prepared
     for group in groups.values():
-        terminal = group[0][2].terminal
+        terminal = group.model.terminal
         if prec.kind == "double":
             handed = _lanes_group(group, part, layout, prec, threads, cancel)
             for path, count in ((PATH_RUN, handed), (PATH_LANES, len(group) - handed)):
@@ -215,23 +305,20 @@ def _record_block(
             part.final[rows, j] = prec.to_text(prec.array(list(column)))
 
 
-def _run_group(
-    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
-) -> None:
+def _run_group(group: Group, part: Chunk, layout: Layout, prec: Precision, threads: int) -> None:
     """Members whose scenes have terminal events: one ``engine.run`` each."""
     from concurrent.futures import ThreadPoolExecutor
 
     from ..core import compiler, engine
 
-    _, scene0, model0 = group[0]
-    compiled, cached = compiler.compile_model(model0, scene0.integrator)  # once, before threads
+    compiled, cached = compiler.compile_model(group.model, group.scene.integrator)  # once
     if not cached:
         part.compile_seconds += compiled.compile_seconds
 
-    def one(item: tuple[int, Scene, Any]) -> None:
-        row, scene, model = item
+    def one(entry: Entry) -> None:
+        row = entry.row
         try:
-            result = engine.run(scene)
+            result = engine.run(entry.scene())
         except IntegrationError as exc:
             result = exc.result
         except Exception as exc:  # one member's failure must not end the sweep
@@ -244,16 +331,15 @@ def _run_group(
             log = result.events.get(name)
             part.events[name][row] = len(log) if log is not None else 0
         values = {**result.variables, **result.monitors}
-        _record_block(
-            part, np.array([row]), layout, prec, _one(values), model.conserved, result.success
-        )
+        conserved = group.model.conserved
+        _record_block(part, np.array([row]), layout, prec, _one(values), conserved, result.success)
 
     with ThreadPoolExecutor(max_workers=max(1, min(threads, len(group)))) as pool:
-        list(pool.map(one, group))
+        list(pool.map(one, group.entries))
 
 
 def _lanes_group(
-    group: list[tuple[int, Scene, Any]],
+    group: Group,
     part: Chunk,
     layout: Layout,
     prec: Precision,
@@ -265,15 +351,16 @@ def _lanes_group(
     hand-over to another variant of their model)."""
     from ..core import compiler, lanes, recording
 
-    _, scene0, model0 = group[0]
+    scene0, model0 = group.scene, group.model
     compiled, cached = compiler.compile_model(model0, scene0.integrator)  # the outputs' evaluator
     batch, batch_cached = lanes.compile_batch(model0, scene0.integrator)
     part.compile_seconds += (0 if cached else compiled.compile_seconds) + (
         0 if batch_cached else batch.compile_seconds
     )
     grid = scene0.time_grid
-    initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
-    pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
+    entries = group.entries
+    initial = np.array([np.asarray(e.initial, dtype=float) for e in entries])
+    pars = np.array([np.asarray(e.pars, dtype=float) for e in entries])
     try:
         with compiler.quiet_heyoka():  # a member going non-finite is reported as such
             runs = lanes.integrate_lanes(
@@ -284,27 +371,28 @@ def _lanes_group(
                 pars,
                 threads,
                 cancel,
-                terminal=[model.terminal for _, _, model in group],
             )
     except Exception as exc:  # the whole call failed: every member of the group is marked
-        for row, _, _ in group:
-            part.message[row] = reason(exc)
+        for e in entries:
+            part.message[e.row] = reason(exc)
         return 0
     if cancel is not None and cancel.is_set():
         return 0  # the chunk is dropped
-    handed = [item for item, run in zip(group, runs, strict=True) if run.handover]
+    handed = [e for e, run in zip(entries, runs, strict=True) if run.handover]
     if handed:
         # A member that reached another variant of its model (Cayley's orbit near the
         # reference plane) needs that variant's code, which its batch does not hold.
         part.why[PATH_RUN] = "a hand-over to another variant of the model (run() compiles it)"
-        _run_group(handed, part, layout, prec, threads)
-    kept = [(item, run) for item, run in zip(group, runs, strict=True) if not run.handover]
+        _run_group(Group(scene0, model0, handed), part, layout, prec, threads)
+    kept = [(e, run) for e, run in zip(entries, runs, strict=True) if not run.handover]
     whole = [(item, run) for item, run in kept if run.status == 0 and len(run.states) == len(grid)]
     # The members that reached every output time, their outputs evaluated at once.
     bad = _record_whole(whole, part, layout, prec, compiled, model0, grid)
     recorded = {id(run) for _, run in whole}
-    rest = [(item, run) for item, run in kept if id(run) not in recorded or item[0] in bad]
-    for (row, _, model), run in rest:
+    rest = [(e, run) for e, run in kept if id(run) not in recorded or e.row in bad]
+    model = model0
+    for e, run in rest:
+        row = e.row
         reached = len(run.states)
         rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
         values = recording.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
@@ -324,7 +412,7 @@ def _lanes_group(
 def _record_whole(
     whole: list, part: Chunk, layout: Layout, prec: Precision, compiled: Any, model: Any, grid
 ) -> set[int]:
-    """Record the members of ``whole`` (``((row, scene, model), LaneResult)`` pairs, every output
+    """Record the members of ``whole`` (``(Entry, LaneResult)`` pairs, every output
     time reached) together; returns the rows of those with a non-finite output, left to the
     caller (which records each up to its first)."""
     from ..core import recording
@@ -342,10 +430,10 @@ def _record_whole(
     for name, v in values.items():
         if name not in model.unbounded:
             finite &= np.all(np.isfinite(v.reshape(m, -1)), axis=1)
-    rows = np.array([item[0] for item, _ in whole])
-    for (row, _, _), run in whole:
-        part.message[row] = run.message
-        _lane_counts(part, row, layout, run)
+    rows = np.array([e.row for e, _ in whole])
+    for e, run in whole:
+        part.message[e.row] = run.message
+        _lane_counts(part, e.row, layout, run)
     part.status[rows[finite]] = OK
     good = {k: v[finite] for k, v in values.items()}
     _record_block(part, rows[finite], layout, prec, good, model.conserved, True)
@@ -361,21 +449,21 @@ def _lane_counts(part: Chunk, row: int, layout: Layout, run: Any) -> None:
 
 
 def _ensemble_group(
-    group: list[tuple[int, Scene, Any]], part: Chunk, layout: Layout, prec: Precision, threads: int
+    group: Group, part: Chunk, layout: Layout, prec: Precision, threads: int
 ) -> None:
     """Members sharing compiled code and without terminal events: heyoka's ensemble."""
     import heyoka as hy
 
     from ..core import compiler, outcomes, recording
 
-    _, scene0, model0 = group[0]
-    compiled, cached = compiler.compile_model(model0, scene0.integrator)
+    scene0, model = group.scene, group.model
+    compiled, cached = compiler.compile_model(model, scene0.integrator)
     if not cached:
         part.compile_seconds += compiled.compile_seconds
     grid = scene0.time_grid
     held = len(compiled.integrator.pars)
-    starts = [prec.array(model.initial_state) for _, _, model in group]
-    pars = [prec.array(model.pars.values) for _, _, model in group]
+    starts = [prec.array(e.initial) for e in group.entries]
+    pars = [prec.array(e.pars) for e in group.entries]
     limit: dict[str, Any] = {"max_steps": scene0.integrator.max_steps}  # the step budget
     if scene0.integrator.max_step is not None:
         limit["max_delta_t"] = prec.number(scene0.integrator.max_step)
@@ -397,10 +485,11 @@ def _ensemble_group(
             **limit,
         )
     except Exception as exc:  # the whole call failed: every member of the group is marked
-        for row, _, _ in group:
-            part.message[row] = reason(exc)
+        for e in group.entries:
+            part.message[e.row] = reason(exc)
         return
-    for i, ((row, _, model), run) in enumerate(zip(group, runs, strict=True)):
+    for i, (entry, run) in enumerate(zip(group.entries, runs, strict=True)):
+        row = entry.row
         member = outcomes.EnsembleRun.of(run)
         ta, states = member.integrator, member.states
         outcome, nsteps = member.ended.outcome, member.ended.steps

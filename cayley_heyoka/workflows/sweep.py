@@ -23,11 +23,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..core.files import WriteFailed
 from ..core.scene import Scene
 from ..core.signals import Cancel, begin_work, held_signals
 from . import sweep_dask
-from .members import integrate_members, prepare_members, propagate_members, split
+from .members import integrate_members, prepare_members, propagate_members, split, tabulate
 from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
 from .sweep_result import (
     FAILED,
@@ -82,6 +84,25 @@ def layout_of(study: Study) -> Layout:
     events = tuple(dict.fromkeys(e.name for e in model.events))
     grid = scene.time_grid
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
+
+
+def _validated(study: Study, indexed: list, keep: bool) -> list[Scene] | None:
+    """Validate every member before anything runs (a member its scene refuses refuses the
+    study, by name). Where the members' family computes their numbers at once
+    (:func:`.members.tabulate`) only the members its table does not vouch for are validated
+    one by one; otherwise each member's scene is, and the scenes are returned for the local
+    backend (``keep``) when they fit in memory (~2.5 kB each), not validated a second time."""
+    tabled = tabulate(study, indexed)
+    if tabled is not None:
+        for k in np.flatnonzero(tabled.table.suspect).tolist():
+            study.member_scene(*indexed[k])
+        return None
+    scenes: list[Scene] | None = [] if keep and len(indexed) <= _KEEP_SCENES else None
+    for i, values in indexed:
+        scene = study.member_scene(i, values)
+        if scenes is not None:
+            scenes.append(scene)
+    return scenes
 
 
 def _pipeline(
@@ -168,14 +189,8 @@ def run_sweep(
         raise TypeError(f"study must be a Study (build it with {how}), got {type(study).__name__}")
     run = override_run(study.run, backend, scheduler, workers, chunk)
     members = study.members()
-    # Every member is validated before anything runs; the scenes are kept for the local
-    # backend when they fit in memory (~2.5 kB each), not validated a second time.
-    keep = run.backend == "local" and len(members) <= _KEEP_SCENES
-    scenes: list[Scene] | None = [] if keep else None
-    for i, values in enumerate(members):
-        scene = study.member_scene(i, values)
-        if scenes is not None:
-            scenes.append(scene)
+    indexed = list(enumerate(members))
+    scenes = _validated(study, indexed, keep=run.backend == "local")
     layout = layout_of(study)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
@@ -202,7 +217,6 @@ def run_sweep(
         if progress is not None:
             progress(done, len(members))
 
-    indexed = list(enumerate(members))
     stopped = None
     try:
         if run.backend == "local":

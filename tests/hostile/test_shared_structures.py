@@ -101,3 +101,29 @@ def test_members_through_a_shared_chart_handler_cross_the_plane_as_alone(hostile
         assert alone.counters["rebasings"] > 0
         assert swept.events["invariable_plane"][row] == len(alone.events["invariable_plane"].time)
         assert swept.steps[row] == alone.counters["steps"]
+
+
+@pytest.mark.covers("verb:sweep", "class:12")
+def test_a_member_the_table_would_pass_but_its_scene_refuses_refuses_the_study(hostile, tmp_path):
+    """Members' numbers computed at once (the family's table) vouch for no member its scene
+    would refuse: moments that violate the triangle inequality, or sit on its edge in decimals,
+    are validated alone, and the study is refused naming the member."""
+    scene = {**BODY, "output": {"times": {"start": 0.0, "stop": 2.0, "count": 3}}}
+    moments = [2.5, 2.25, "2.5000000000000000001", 0.5, 2.6]  # 2.6 > 1 + 1.5
+    out = tmp_path / "s.h5"
+    hostile.run(["sweep", _study(hostile, scene, {"body.inertia[2]": moments}), "--out", str(out)],
+                expect="refused", field="member 2 (body.inertia[2] = 2.5): body.inertia")  # fmt: skip
+    assert not out.exists()
+    doubles = [2.5, 2.25, 0.5, 2.6]
+    hostile.run(["sweep", _study(hostile, scene, {"body.inertia[2]": doubles}), "--out", str(out)],
+                expect="refused", field="member 3 (body.inertia[2] = 2.6): body.inertia")  # fmt: skip
+    assert not out.exists()
+    edge = [2.5, 2.25, "2.4999999999999999999", 0.5]
+    hostile.run(["sweep", _study(hostile, scene, {"body.inertia[2]": edge}), "--out", str(out)],
+                expect="done", out=out)  # fmt: skip
+    swept = ch.load_sweep(out)
+    for row, c in enumerate(edge):
+        alone = ch.run(ch.Scene.from_dict({**scene, "body": {"inertia": [1.0, 1.5, c]}}))
+        expected = [float(alone.variables[n][-1]) for n in swept.final_names]
+        np.testing.assert_allclose(swept.final_state[row], expected, rtol=1e-12, atol=1e-13)
+        assert swept.steps[row] == alone.counters["steps"]
