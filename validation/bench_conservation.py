@@ -267,14 +267,11 @@ def integrate(case: Case, job: dict[str, Any]) -> tuple[dict[str, list[np.ndarra
     seconds = time.perf_counter() - t0
     drifts: dict[str, list[np.ndarray]] = {label: [] for label, _ in case.quantities}
     steps = []
-    prec = job["options"].precision
     for model, run in zip(models, runs, strict=True):
         if run.status != 0:
             raise RuntimeError(f"{case.label}: a member stopped: {run.message}")
         rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None], len(run.states), 0)
-        values = recording.evaluate_outputs(
-            job["compiled"], model, run.states, rows, job["grid"], prec
-        )
+        values = recording.evaluate_outputs(job["compiled"], model, run.states, rows, job["grid"])
         steps.append(run.counters["steps"])
         for label, monitor in case.quantities:
             m = np.asarray(values[monitor], float).reshape(len(job["grid"]), -1)

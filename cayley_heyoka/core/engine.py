@@ -181,7 +181,7 @@ class Propagation:
         # A variant a terminal handler asked for (:class:`Handover`), taken over after the call.
         self._handover: Handover | None = None
         first = evaluate_outputs(
-            self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1], prec
+            self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1]
         )
         if not all(np.all(np.isfinite(v)) for k, v in first.items() if k not in model.unbounded):
             raise start_failure(model, prec, initial, self._pars, self.grid[0], first)
@@ -666,7 +666,7 @@ class Propagation:
         times = self.grid[: len(states)]
         if self._parity is not None:
             self._parity.finish(self._crossings())
-        values = evaluate_outputs(self.compiled, model, states, pars, times, prec)
+        values = evaluate_outputs(self.compiled, model, states, pars, times)
         if self.status == 0 and (bad := first_nonfinite(model, values, times)) is not None:
             # A finite state can still give an infinite output (V = "1/(t - 1)" at t = 1): the
             # run stops at the last row whose every output is finite, as for the state.

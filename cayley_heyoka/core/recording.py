@@ -144,7 +144,6 @@ def evaluate_outputs(
     state: np.ndarray,
     pars: np.ndarray,
     times: np.ndarray,
-    prec: Precision,
 ) -> dict[str, np.ndarray]:
     """The model's outputs and monitors from states recorded by ``compiled``'s integrator.
 
@@ -157,69 +156,76 @@ def evaluate_outputs(
     pars
         The whole parameter vector at each time, shape ``(n, len(model.pars))``.
     times
-        The ``n`` times.
-    prec
-        The precision of the arrays.
+        The ``n`` times (the arrays in the run's precision).
 
     Returns
     -------
     dict
         Each output and monitor by name: shape ``(n,)``, or ``(n, k)`` for a k-vector monitor.
     """
-    return evaluate_blocks(compiled, model, [(state, pars, times)], prec)[0]
+    stacked = evaluate_members(
+        compiled, model, np.asarray(state)[None], np.asarray(pars)[None], times
+    )
+    return {name: value[0] for name, value in stacked.items()}
 
 
-def evaluate_blocks(
+def evaluate_members(
     compiled: Compiled,
     model: Model,
-    blocks: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]],
-    prec: Precision,
-) -> list[dict[str, np.ndarray]]:
-    """:func:`evaluate_outputs` of several runs' ``(state, pars, times)`` at once (the members
+    states: np.ndarray,
+    pars: np.ndarray,
+    times: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """:func:`evaluate_outputs` of several runs recorded at the same ``n`` times (the members
     of a sweep), in one call of the compiled evaluator.
+
+    ``states`` is ``(runs, n, len(model.system))``, ``pars`` each run's whole parameter
+    vector, ``(runs, len(model.pars))``, or one per time, ``(runs, n, len(model.pars))``;
+    each output is returned as ``(runs, n)`` or ``(runs, n, k)``.
 
     The evaluator works SIMD lanes at a time, and some functions iterate until every lane of a
     batch has converged (Kepler's equation): a row's bits depend on the rows beside it. Each
-    block is therefore cut into whole batches of its own rows (the last padded with copies of
+    run is therefore cut into whole batches of its own rows (the last padded with copies of
     its last row), so that a run's outputs are the same bits alone or beside others.
     """
     evaluator = compiled.evaluator
     width = max(1, int(getattr(evaluator, "batch_size", 1)))
-    sizes = [len(state) for state, _, _ in blocks]
-    padded = [-(-n // width) * width for n in sizes]
-    total = sum(padded)
-    if total == 0:
-        rows = np.empty((len(flat_outputs(model)), 0))
+    runs, n = states.shape[:2]
+    to = -(-n // width) * width
+    if runs == 0 or n == 0:
+        rows = np.empty((len(flat_outputs(model)), runs, n))
     else:
-        # Stacked in the precision's own arrays (a concatenation keeps heyoka's dtypes).
-        def pad(a: np.ndarray, n: int, to: int) -> np.ndarray:
-            return a if to == n else np.concatenate([a, np.repeat(a[-1:], to - n, axis=0)])
-
-        def stack(i: int) -> np.ndarray:
-            used = [(b[i], n, to) for b, n, to in zip(blocks, sizes, padded, strict=True) if n]
-            if len(used) == 1 and used[0][1] == used[0][2]:
-                return np.asarray(used[0][0])  # one run, whole batches: nothing to copy
-            return np.concatenate([pad(np.asarray(a), n, to) for a, n, to in used])
-
-        state = stack(0)
-        kwargs: dict[str, Any] = {"time": np.ascontiguousarray(stack(2))}
+        # In the precision's own arrays (a concatenation keeps heyoka's dtypes).
+        if to != n:
+            states = np.concatenate([states, np.repeat(states[:, -1:], to - n, axis=1)], axis=1)
+        flat = states.reshape(runs * to, states.shape[2])
+        kwargs: dict[str, Any] = {
+            "time": np.ascontiguousarray(np.tile(_padded(np.asarray(times), to), runs))
+        }
         if evaluator.nparams:
-            kwargs["pars"] = np.ascontiguousarray(stack(1)[:, : evaluator.nparams].T)
-        rows = evaluator(np.ascontiguousarray(state.T), **kwargs)
-    out: list[dict[str, np.ndarray]] = []
-    lo = 0
-    for n, to in zip(sizes, padded, strict=True):
-        part = rows[:, lo : lo + n]
-        lo += to
-        values: dict[str, np.ndarray] = {}
-        k = 0
-        for name, value in list(model.outputs.items()) + list(model.monitors.items()):
-            width_k = len(value) if isinstance(value, list) else 1
-            block = part[k : k + width_k]
-            values[name] = block.T.copy() if isinstance(value, list) else block[0].copy()
-            k += width_k
-        out.append(values)
-    return out
+            used = pars[..., : evaluator.nparams]
+            if used.ndim == 2:
+                used = np.repeat(used[:, None, :], to, axis=1)
+            elif to != n:
+                used = np.concatenate([used, np.repeat(used[:, -1:], to - n, axis=1)], axis=1)
+            kwargs["pars"] = np.ascontiguousarray(used.reshape(runs * to, -1).T)
+        rows = evaluator(np.ascontiguousarray(flat.T), **kwargs)
+        rows = rows.reshape(rows.shape[0], runs, to)[:, :, :n]
+    values: dict[str, np.ndarray] = {}
+    k = 0
+    for name, value in list(model.outputs.items()) + list(model.monitors.items()):
+        width_k = len(value) if isinstance(value, list) else 1
+        block = rows[k : k + width_k]
+        values[name] = (
+            block.transpose(1, 2, 0).copy() if isinstance(value, list) else block[0].copy()
+        )
+        k += width_k
+    return values
+
+
+def _padded(times: np.ndarray, to: int) -> np.ndarray:
+    n = len(times)
+    return times if to == n else np.concatenate([times, np.repeat(times[-1:], to - n)])
 
 
 def event_logs(

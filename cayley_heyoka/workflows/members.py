@@ -395,7 +395,7 @@ def _lanes_group(
         row = e.row
         reached = len(run.states)
         rows = run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None, :], reached, axis=0)
-        values = recording.evaluate_outputs(compiled, model, run.states, rows, grid[:reached], prec)
+        values = recording.evaluate_outputs(compiled, model, run.states, rows, grid[:reached])
         complete = run.status == 0
         part.message[row] = run.message
         if complete and (found := recording.first_nonfinite(model, values, grid)) is not None:
@@ -419,13 +419,15 @@ def _record_whole(
 
     if not whole:
         return set()
-    n, m = len(grid), len(whole)
-    blocks = [
-        (run.states, run.pars if run.pars.ndim == 2 else np.repeat(run.pars[None], n, axis=0), grid)
-        for _, run in whole
-    ]
-    each = recording.evaluate_blocks(compiled, model, blocks, prec)
-    values = {k: np.stack([v[k] for v in each]) for k in each[0]}
+    m = len(whole)
+    states = np.stack([run.states for _, run in whole])
+    if all(run.pars.ndim == 1 for _, run in whole):
+        pars = np.stack([run.pars for _, run in whole])
+    else:  # terminal handlers changed some members' parameters: one vector per output time
+        pars = np.stack(
+            [np.broadcast_to(run.pars, (len(grid), run.pars.shape[-1])) for _, run in whole]
+        )
+    values = recording.evaluate_members(compiled, model, states, pars, grid)
     finite = np.ones(m, dtype=bool)
     for name, v in values.items():
         if name not in model.unbounded:
@@ -514,7 +516,7 @@ def _ensemble_group(
             part.events[name][row] = len(logs[name]) if name in logs else 0
         # Copies row by row: np.repeat aliases the limbs of heyoka's multiprecision dtype.
         rows = np.array([pars[i].copy() for _ in range(reached)]).reshape(reached, len(pars[i]))
-        values = recording.evaluate_outputs(compiled, model, states, rows, grid[:reached], prec)
+        values = recording.evaluate_outputs(compiled, model, states, rows, grid[:reached])
         if complete and (bad := recording.first_nonfinite(model, values, grid)) is not None:
             # As a lone run would: the member stops at its first non-finite output.
             k, part.message[row] = bad
