@@ -125,6 +125,12 @@ class Tabled:
     model: Any
     table: Any
 
+    def rows(self, lo: int, hi: int) -> Tabled:
+        """The members ``lo`` to ``hi`` (excluded) of this table."""
+        t = self.table
+        part = type(t)(t.initial[lo:hi], t.pars[lo:hi], t.suspect[lo:hi])
+        return Tabled(self.scene, self.model, part)
+
 
 def tabulate(study: Study, members: Sequence[Member]) -> Tabled | None:
     """The members' numbers as arrays, where their family computes them at once (double
@@ -157,10 +163,12 @@ def prepare_members(
     members: Sequence[Member],
     layout: Layout,
     scenes: Sequence[Scene] | None = None,
+    tabled: Tabled | None = None,
 ) -> Prepared:
     """The first half of :func:`propagate_members`: each member's numbers, grouped by compiled
     structure (Python work, run while the previous chunk integrates) — from its family's table
-    where it has one (:func:`tabulate`), else from the member's scene and model."""
+    where it has one (``tabled`` if the caller has it, else :func:`tabulate`), else from the
+    member's scene and model."""
     from ..core.structures import model_for
 
     prec = study.precision
@@ -176,7 +184,8 @@ def prepare_members(
     )
     groups: dict[str, Group] = {}
     alone = range(n)
-    tabled = tabulate(study, members)
+    if tabled is None and scenes is None:
+        tabled = tabulate(study, members)
     if tabled is not None:
         table = tabled.table
         group = groups[_group_key(tabled.model, tabled.scene)] = Group(tabled.scene, tabled.model)

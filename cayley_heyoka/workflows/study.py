@@ -22,6 +22,7 @@ any scene. Running a study: :mod:`.sweep`; its file: :mod:`.sweep_result`.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import re
@@ -261,7 +262,7 @@ class Study:
         source = {"title": title, "scene": scene, "scene_file": scene_file, "sweep": sweep}
         return cls(title, scene, scene_file, kind, parameters, count, seed, run, plain_copy(source))
 
-    @property
+    @functools.cached_property
     def precision(self) -> Precision:
         """The base scene's precision (every member's)."""
         return Scene.from_dict(self.scene).integrator.precision

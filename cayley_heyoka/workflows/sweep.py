@@ -29,7 +29,14 @@ from ..core.files import WriteFailed
 from ..core.scene import Scene
 from ..core.signals import Cancel, begin_work, held_signals
 from . import sweep_dask
-from .members import integrate_members, prepare_members, propagate_members, split, tabulate
+from .members import (
+    Tabled,
+    integrate_members,
+    prepare_members,
+    propagate_members,
+    split,
+    tabulate,
+)
 from .study import DEFAULT_CHUNK, Parameter, RunOptions, Study, load_study, override_run
 from .sweep_result import (
     FAILED,
@@ -86,23 +93,24 @@ def layout_of(study: Study) -> Layout:
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
 
 
-def _validated(study: Study, indexed: list, keep: bool) -> list[Scene] | None:
+def _validated(study: Study, indexed: list, keep: bool) -> tuple[list[Scene] | None, Tabled | None]:
     """Validate every member before anything runs (a member its scene refuses refuses the
     study, by name). Where the members' family computes their numbers at once
     (:func:`.members.tabulate`) only the members its table does not vouch for are validated
     one by one; otherwise each member's scene is, and the scenes are returned for the local
-    backend (``keep``) when they fit in memory (~2.5 kB each), not validated a second time."""
+    backend (``keep``) when they fit in memory (~2.5 kB each), not validated a second time.
+    Returns the scenes kept and the table."""
     tabled = tabulate(study, indexed)
     if tabled is not None:
         for k in np.flatnonzero(tabled.table.suspect).tolist():
             study.member_scene(*indexed[k])
-        return None
+        return None, tabled
     scenes: list[Scene] | None = [] if keep and len(indexed) <= _KEEP_SCENES else None
     for i, values in indexed:
         scene = study.member_scene(i, values)
         if scenes is not None:
             scenes.append(scene)
-    return scenes
+    return scenes, None
 
 
 def _pipeline(
@@ -112,6 +120,7 @@ def _pipeline(
     threads: int,
     size: int,
     scenes: list[Scene] | None,
+    tabled: Tabled | None,
     take: Callable[[Chunk], None],
 ) -> None:
     """Chunk by chunk, building the next chunk's models while the current one integrates:
@@ -126,8 +135,10 @@ def _pipeline(
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
             for part in split(indexed, size):
-                given = [scenes[i] for i, _ in part] if scenes is not None else None
-                prepared = prepare_members(study, part, layout, given)
+                lo, hi = part[0][0], part[-1][0] + 1
+                given = scenes[lo:hi] if scenes is not None else None
+                rows = tabled.rows(lo, hi) if tabled is not None else None
+                prepared = prepare_members(study, part, layout, given, rows)
                 if pending is not None:
                     take(pending.result())
                 pending = pool.submit(integrate_members, prepared, layout, prec, threads, cancel)
@@ -190,7 +201,7 @@ def run_sweep(
     run = override_run(study.run, backend, scheduler, workers, chunk)
     members = study.members()
     indexed = list(enumerate(members))
-    scenes = _validated(study, indexed, keep=run.backend == "local")
+    scenes, tabled = _validated(study, indexed, keep=run.backend == "local")
     layout = layout_of(study)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
@@ -224,7 +235,7 @@ def run_sweep(
             info["workers"] = threads
             size = run.chunk or DEFAULT_CHUNK
             info["chunk"] = size
-            _pipeline(study, indexed, layout, threads, size, scenes, take)
+            _pipeline(study, indexed, layout, threads, size, scenes, tabled, take)
         else:
             info.update(sweep_dask.propagate(cluster, study, indexed, layout, run, take))
     except BaseException as exc:
