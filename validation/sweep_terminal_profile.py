@@ -12,6 +12,9 @@ free body in a Rodrigues chart with its re-basings). For each:
   (``lanes.integrate_lanes``), and ``integrate_members`` (the lanes and the outputs' evaluation
   and recording), beside the whole ``run_sweep`` on one worker and the hand-written floor
   on one thread (users_engine.HandWrittenLanes);
+* the time in the terminal events' callbacks, within heyoka's calls, per event: the lanes'
+  (``_Lanes._on_terminal``: the member's handler on a view of its lane, and its bookkeeping) and
+  the floor's hand-written ones, each wrapped in a timer for the measurement (one thread);
 * a cProfile of the same work in the main thread on one thread (cProfile sees one thread
   only): scenes, ``prepare_members`` and ``integrate_members(threads=1)``, its top entries by
   own time and by cumulative time.
@@ -27,7 +30,14 @@ import statistics
 import time
 from collections.abc import Callable
 
-from users_engine import TERMINAL_CASES, HandWrittenLanes, _our_lanes, terminal_study
+from users_engine import (
+    TERMINAL_CASES,
+    HandWrittenLanes,
+    _LaneCharts,
+    _LaneRevolutions,
+    _our_lanes,
+    terminal_study,
+)
 
 from cayley_heyoka.core import lanes
 from cayley_heyoka.workflows.members import integrate_members, prepare_members
@@ -44,6 +54,42 @@ def _times(fn: Callable[[], object]) -> list[float]:
         fn()
         times.append(time.process_time() - t0)
     return times
+
+
+def _callback_seconds(ours: Callable[[], object], floor: HandWrittenLanes) -> dict[str, float]:
+    """Seconds a terminal event's callback takes, ours and the floor's (least of the repeats'
+    means), each wrapped in a timer while measured."""
+    spent = {"ours": 0.0, "floor": 0.0}
+    calls = {"ours": 0, "floor": 0}
+
+    def timed(side: str, fn: Callable[..., bool]) -> Callable[..., bool]:
+        def call(*args: object) -> bool:
+            t0 = time.perf_counter()
+            try:
+                return fn(*args)
+            finally:
+                spent[side] += time.perf_counter() - t0
+                calls[side] += 1
+
+        return call
+
+    kept = lanes._Lanes._on_terminal
+    floor_kept = {cls: cls.__call__ for cls in (_LaneRevolutions, _LaneCharts)}
+    lanes._Lanes._on_terminal = timed("ours", kept)  # type: ignore[method-assign]
+    for cls, fn in floor_kept.items():
+        cls.__call__ = timed("floor", fn)  # type: ignore[method-assign]
+    best = {"ours": float("inf"), "floor": float("inf")}
+    try:
+        for _ in range(REPEATS):
+            for side, fn in (("ours", ours), ("floor", floor)):
+                spent[side], calls[side] = 0.0, 0
+                fn()
+                best[side] = min(best[side], spent[side] / max(calls[side], 1))
+    finally:
+        lanes._Lanes._on_terminal = kept  # type: ignore[method-assign]
+        for cls, fn in floor_kept.items():
+            cls.__call__ = fn  # type: ignore[method-assign]
+    return best
 
 
 def _case(label: str, members: int, top: int) -> None:
@@ -92,6 +138,19 @@ def _case(label: str, members: int, top: int) -> None:
         given = [study.member_scene(i, v) for i, v in listed]
         prepared = prepare_members(study, listed, layout, given)
         integrate_members(prepared, layout, prec, 1)
+
+    terminal = [model.terminal] * len(listed)
+    per_event = _callback_seconds(
+        lambda: lanes.integrate_lanes(
+            model, scene0.integrator, grid, initial, pars, 1, terminal=terminal
+        ),
+        floor,
+    )
+    print(
+        f"  terminal callback, µs an event (least of {REPEATS} means): lanes "
+        f"{per_event['ours'] * 1e6:.1f}, floor {per_event['floor'] * 1e6:.1f} "
+        f"({per_event['ours'] / per_event['floor']:.1f}×)"
+    )
 
     single()
     profile = cProfile.Profile()
