@@ -64,6 +64,28 @@ def _exact(x: float) -> Fraction:
     return Fraction(x)
 
 
+def fold(base: list[float], lam: float, mu: float, nu: float) -> list[float]:
+    """The new base of a re-basing: ``base ⊗ (1, λ, μ, ν)``, normalised once (the floors'
+    re-basing algebra, here and in users_engine.py)."""
+    w0, x0, y0, z0 = base
+    w = w0 - x0 * lam - y0 * mu - z0 * nu
+    x = w0 * lam + x0 + y0 * nu - z0 * mu
+    y = w0 * mu - x0 * nu + y0 + z0 * lam
+    z = w0 * nu + x0 * mu - y0 * lam + z0
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    return [w / n, x / n, y / n, z / n]
+
+
+def whole_attitude(Q: np.ndarray, lam: np.ndarray, mu: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """The whole attitude's λ, μ, ν at outputs whose bases are the rows of ``Q`` and whose
+    chart parameters are ``lam``, ``mu``, ``nu``: shape ``(3, outputs)``."""
+    w = Q[:, 0] - Q[:, 1] * lam - Q[:, 2] * mu - Q[:, 3] * nu
+    x = Q[:, 0] * lam + Q[:, 1] + Q[:, 2] * nu - Q[:, 3] * mu
+    y = Q[:, 0] * mu - Q[:, 1] * nu + Q[:, 2] + Q[:, 3] * lam
+    z = Q[:, 0] * nu + Q[:, 1] * mu - Q[:, 2] * lam + Q[:, 3]
+    return np.array([x / w, y / w, z / w])
+
+
 class _Fold:
     """The floor's terminal-event callback: folds the chart into the base inside heyoka's call
     (as ``run()`` does), remembering each new base and its time."""
@@ -77,14 +99,7 @@ class _Fold:
 
     def __call__(self, ta: Any, d_sgn: Any) -> bool:
         st = ta.state
-        lam, mu, nu = st[3], st[4], st[5]
-        w0, x0, y0, z0 = self.base
-        w = w0 - x0 * lam - y0 * mu - z0 * nu
-        x = w0 * lam + x0 + y0 * nu - z0 * mu
-        y = w0 * mu - x0 * nu + y0 + z0 * lam
-        z = w0 * nu + x0 * mu - y0 * lam + z0
-        n = math.sqrt(w * w + x * x + y * y + z * z)
-        self.base = [w / n, x / n, y / n, z / n]
+        self.base = fold(self.base, st[3], st[4], st[5])
         self.changes.append((ta.time, self.base))
         st[3:6] = 0.0
         return True
@@ -138,12 +153,7 @@ class HandWrittenCharts:
         times = np.array([t for t, _ in fold.changes])
         bases = [[1.0, 0.0, 0.0, 0.0]] + [b for _, b in fold.changes]
         Q = np.array(bases)[np.searchsorted(times, grid, side="left")]
-        lam, mu, nu = S[:, 3], S[:, 4], S[:, 5]
-        w = Q[:, 0] - Q[:, 1] * lam - Q[:, 2] * mu - Q[:, 3] * nu
-        x = Q[:, 0] * lam + Q[:, 1] + Q[:, 2] * nu - Q[:, 3] * mu
-        y = Q[:, 0] * mu - Q[:, 1] * nu + Q[:, 2] + Q[:, 3] * lam
-        z = Q[:, 0] * nu + Q[:, 1] * mu - Q[:, 2] * lam + Q[:, 3]
-        return steps, folds, np.array([x / w, y / w, z / w])
+        return steps, folds, whole_attitude(Q, S[:, 3], S[:, 4], S[:, 5])
 
 
 def _chart_scene(stop: float, count: int) -> ch.Scene:
