@@ -104,14 +104,12 @@ def _case(label: str, members: int, top: int) -> None:
     prec = study.precision
 
     def lanes_phase() -> float:
-        group = prepare_members(study, listed, layout, scenes)[1]
-        terminal = [m.terminal for _, _, m in next(iter(group.values()))]
         t0 = time.process_time()
-        lanes.integrate_lanes(model, scene0.integrator, grid, initial, pars, 1, terminal=terminal)
+        lanes.integrate_lanes(model, scene0.integrator, grid, initial, pars, 1)
         return time.process_time() - t0
 
     def members_phase() -> float:
-        prepared = prepare_members(study, listed, layout, scenes)
+        prepared = prepare_members(study, listed, layout)
         t0 = time.process_time()
         integrate_members(prepared, layout, prec, 1)
         return time.process_time() - t0
@@ -121,7 +119,10 @@ def _case(label: str, members: int, top: int) -> None:
         "hand-written floor (1 thread)": _times(floor),
         "member scenes (validated)": _times(lambda: [study.member_scene(*m) for m in listed]),
         "layout_of": _times(lambda: layout_of(study)),
-        "prepare_members (model_for)": _times(
+        "prepare_members (as the sweep: its table)": _times(
+            lambda: prepare_members(study, listed, layout)
+        ),
+        "prepare_members (each member's model_for)": _times(
             lambda: prepare_members(study, listed, layout, scenes)
         ),
         "integrate_lanes": [lanes_phase() for _ in range(REPEATS)],
@@ -135,8 +136,7 @@ def _case(label: str, members: int, top: int) -> None:
         print(f"  {name:40s} {least * 1e3:8.1f} {median * 1e3:8.1f}  {least / whole:5.1%}")
 
     def single() -> None:
-        given = [study.member_scene(i, v) for i, v in listed]
-        prepared = prepare_members(study, listed, layout, given)
+        prepared = prepare_members(study, listed, layout)
         integrate_members(prepared, layout, prec, 1)
 
     terminal = [model.terminal] * len(listed)

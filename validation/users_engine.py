@@ -405,18 +405,11 @@ def _our_lanes(study: Study) -> tuple[Any, np.ndarray, np.ndarray, list]:
     listed = list(enumerate(study.members()))
     _, groups = prepare_members(study, listed, layout_of(study))
     (group,) = groups.values()
-    model = group[0][2]
-    initial = np.array([np.asarray(m.initial_state, dtype=float) for _, _, m in group])
-    pars = np.array([np.asarray(m.pars.values, dtype=float) for _, _, m in group])
-    scene0 = group[0][1]
+    model, scene0 = group.model, group.scene
+    initial = np.array([np.asarray(e.initial, dtype=float) for e in group.entries])
+    pars = np.array([np.asarray(e.pars, dtype=float) for e in group.entries])
     runs = lanes.integrate_lanes(
-        model,
-        scene0.integrator,
-        scene0.time_grid,
-        initial,
-        pars,
-        os.cpu_count() or 1,
-        terminal=[m.terminal for _, _, m in group],
+        model, scene0.integrator, scene0.time_grid, initial, pars, os.cpu_count() or 1
     )
     return model, initial, pars, runs
 

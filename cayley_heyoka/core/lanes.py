@@ -352,14 +352,15 @@ class _Shared:
 
 
 class _LaneView:
-    """One lane of a batch integrator, as a terminal-event handler sees an integrator."""
+    """One lane of a batch integrator, as a terminal-event handler sees an integrator.
+
+    ``state`` is a view of the lane's column of the integrator's state (assignments reach the
+    integrator), made once: heyoka's arrays stay where they are for the integrator's life,
+    and building a view costs more than a handler's arithmetic."""
 
     def __init__(self, ta: Any, lane: int) -> None:
         self._ta, self._lane = ta, lane
-
-    @property
-    def state(self) -> np.ndarray:
-        return self._ta.state[:, self._lane]  # a view: assignments reach the integrator
+        self.state: np.ndarray = ta.state[:, lane]
 
     @property
     def time(self) -> float:
@@ -417,6 +418,8 @@ class _Lanes:
         self.twins: list[_Member | None] = [None] * self.width
         for ev in ta.t_events if model.terminal else ():
             ev.callback.target = self._on_terminal
+        self.views = [_LaneView(ta, j) for j in range(self.width)]
+        self.ta_pars = ta.pars  # a view, as the views' states
 
     def run(self, initial: np.ndarray, pars: np.ndarray, terminal: Any) -> None:
         """Members a batch at a time: one call over the whole grid, the usual case; a batch in
@@ -686,13 +689,13 @@ class _Lanes:
         m = self.lanes[lane] or self.twins[lane]
         if m is None:
             raise RuntimeError(f"lane {lane} reached a terminal event with no member")
-        t = ta.time[lane]
+        hi, lo = ta.dtime
+        t = hi[lane]  # heyoka's time is the high part of its double-length time
         if m.rows is not None:
-            hi, lo = ta.dtime
-            engine.pass_rows(m.rows, m.rows_pars, (hi[lane], lo[lane]), m.pars)
+            engine.pass_rows(m.rows, m.rows_pars, (t, lo[lane]), m.pars)
         spec = m.terminal[index]
-        stop = call_handler(spec, _LaneView(ta, lane), m.pars, t)
-        ta.pars[:, lane] = m.pars[: self.held]
+        stop = call_handler(spec, self.views[lane], m.pars, t)
+        self.ta_pars[:, lane] = m.pars[: self.held]
         m.counters[spec.counter] += 1
         if isinstance(stop, Handover):
             # The variant's code is another batch integrator: the member goes to run().
@@ -706,7 +709,7 @@ class _Lanes:
             return False
         if m.parity is not None:
             self._gather(lane, m)
-            state = np.ascontiguousarray(ta.state[:, lane])
+            state = np.ascontiguousarray(self.views[lane].state)
             m.parity.note(state, m.pars, t, m.crossings())
         if self._cancelled():
             ta.pars[:, lane] = np.nan  # a Cancel's poison was overwritten just above
