@@ -319,23 +319,20 @@ class Propagation:
         pars_rows: list,
         calls: int | None = None,
     ) -> None:
-        ta, prec, grid = self._ta, self.precision, self.grid
-        # Outputs come from heyoka's dense output: only the last point of a propagate_grid call
-        # ends a step there. One call covers every output time up to ``until``: terminal
-        # events are handled inside it (:class:`TerminalCallback`), so the trajectory depends
-        # neither on the output grid nor on where events fall. A call returns early only to
-        # stop (a handler's stop, the step budget, a non-finite state, a signal) or at the end
-        # of the first call's probe.
+        """heyoka's calls up to ``until`` (the output times before ``end``), each call's rows
+        appended to ``states`` and ``pars_rows``; at most ``calls`` calls (None: as many as
+        it takes).
+
+        Outputs come from heyoka's dense output: only the last point of a ``propagate_grid``
+        call ends a step there. One call covers every output time up to ``until``: terminal
+        events are handled inside it (:class:`TerminalCallback`), so the trajectory depends
+        neither on the output grid nor on where events fall. A call returns early only to stop
+        (a handler's stop, the step budget, a non-finite state, a signal) or at the end of the
+        first call's probe (:class:`.span_probe.SpanProbe`).
+        """
+        ta = self._ta
         while self.status == 0 and (self.done < end or ta.time < until):
-            if self._signals.received:
-                self.status = INTERRUPTED
-                # A poisoned step leaves heyoka's time NaN: name the last output time kept.
-                when = ta.time if math.isfinite(float(ta.time)) else grid[max(self.done - 1, 0)]
-                self.message = (
-                    f"interrupted ({self._signals.received}) at t = {when}; results kept "
-                    "up to there"
-                )
-                raise KeyboardInterrupt
+            self._raise_if_interrupted()
             if calls is not None:
                 if calls == 0:
                     return
@@ -344,83 +341,113 @@ class Propagation:
             if left <= 0:
                 self._out_of_steps(budget)
                 break
-            i = self.done
-            points = grid[i:end]
-            outputs = len(points)
-            if outputs == 0 or points[-1] != until:
-                points = _ending_at(prec, points, until)  # a boundary, not an output
-            resume = ta.time != points[0]
-            if resume:
-                points = _starting_at(prec, ta.time, points)
-            # A call that returned mid-stretch could not be resumed without changing bits
-            # (heyoka starts each call with a step to its first point, and the double-length
-            # time is not a grid point), so a signal ends the call after a whole step: by
-            # poisoning the parameters (Watch), or else by a callback after each step.
-            callback: Callable[[Any], bool] | None = self._callback
-            if callback is None and self._signals.active and not self._poisoning:
-                callback = SignalCallback(self._signals, self._zero)
-            probe = self._probe.limit
-            limit = left if probe is None else min(left, probe)
-            if probe is not None and isinstance(callback, ProgressCallback):
-                # Progress is reported once a step is kept: a cut probe is taken again.
-                callback = HeldProgress(callback)
-            self._rows, self._rows_pars = grid[i : i + outputs], []
-            self._next_row = grid[i] if outputs else None
+            points, outputs, resume = self._call_points(until, end)
+            callback, limit = self._call_guard(left)
             res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
-            ended, out = outcomes.Ended.of(res), res[-1]
-            outcome = ended.outcome
-            taken = self.counters["steps"] + ended.steps
-            zero = ended.zero_step or self._zero.seen
-            stuck = zero and not self._signals.received
-            cut = (
-                probe is not None
-                and outcome == hy.taylor_outcome.step_limit
-                and limit < left
-                and not stuck
-            )
-            if probe is not None:
-                self._probe.after(taken, ta.dtime, budget, cut)
-            if cut:
-                # Resuming this call would change bits (see below): start again, uncut.
-                ta = self._restart()
-                continue
+            ended = outcomes.Ended.of(res)
+            stuck = (ended.zero_step or self._zero.seen) and not self._signals.received
+            if self._probe.limit is not None:
+                cut = ended.outcome == hy.taylor_outcome.step_limit and limit < left and not stuck
+                self._probe.after(self.counters["steps"] + ended.steps, ta.dtime, budget, cut)
+                if cut:
+                    # Resuming this call would change bits (see below): start again, uncut.
+                    ta = self._restart()
+                    continue
             if isinstance(callback, HeldProgress):
                 callback.release()
-            out = out[int(resume) : int(resume) + outputs]
-            self.counters["steps"] += ended.steps
-            states.append(out)
-            given = self._rows_pars[: len(out)]
-            pars_rows += given + [self._pars.copy() for _ in range(len(out) - len(given))]
-            self.done += len(out)
-            code = int(outcome)
+            self._record(res[-1][int(resume) : int(resume) + outputs], ended, states, pars_rows)
             if self._handover is not None:
                 ta = self._take_over(self._handover.variant)
                 self._settle(ta, ta.time)  # in the variant's terms (its events' expressions)
                 continue
-            if outcome == hy.taylor_outcome.time_limit:
-                continue
-            if stuck:
-                when = self._zero.at if self._zero.seen else ta.time
-                self.status, self.message = -1, outcomes.zero_step_message(self.model, when)
+            if not self._goes_on(ended, stuck, budget):
                 break
-            if outcome == hy.taylor_outcome.step_limit:
-                self._out_of_steps(budget)
-                break
-            if self._signals.received and self.status == 0:
-                continue  # reported at the top of the loop
-            if -len(self.terminal) <= code <= -1:
-                continue  # a handler stopped the run (its status and message are set)
-            self.status = -1
-            if outcome == hy.taylor_outcome.err_nf_state:
-                # heyoka's time may itself be NaN then: name the last output time kept instead.
-                when = ta.time if math.isfinite(float(ta.time)) else grid[max(self.done - 1, 0)]
-                self.message = outcomes.nonfinite(when)
-                if self.done == 0 and (cause := self._cause_at_start()) is not None:
-                    raise cause  # the first step cannot be taken: nothing was integrated
-            elif outcome == hy.taylor_outcome.cb_stop:
-                self.message = f"stopped by the progress callback at t = {ta.time}"
-            else:
-                self.message = outcomes.other(outcome, ta.time)
+
+    def _raise_if_interrupted(self) -> None:
+        """A signal received: the run is interrupted (its status and message say where)."""
+        if not self._signals.received:
+            return
+        self.status = INTERRUPTED
+        # A poisoned step leaves heyoka's time NaN: name the last output time kept.
+        t = self._ta.time
+        when = t if math.isfinite(float(t)) else self.grid[max(self.done - 1, 0)]
+        self.message = (
+            f"interrupted ({self._signals.received}) at t = {when}; results kept up to there"
+        )
+        raise KeyboardInterrupt
+
+    def _call_points(self, until: Any, end: int) -> tuple[np.ndarray, int, bool]:
+        """The next call's grid — the output times left before ``end``, ``until`` after them
+        if it is none, the current time before them if the run stands between two — with how
+        many are outputs and whether the current time leads them; and the rows it records,
+        for :meth:`_on_terminal`."""
+        prec, grid, i = self.precision, self.grid, self.done
+        points = grid[i:end]
+        outputs = len(points)
+        if outputs == 0 or points[-1] != until:
+            points = _ending_at(prec, points, until)  # a boundary, not an output
+        resume = self._ta.time != points[0]
+        if resume:
+            points = _starting_at(prec, self._ta.time, points)
+        self._rows, self._rows_pars = grid[i : i + outputs], []
+        self._next_row = grid[i] if outputs else None
+        return points, outputs, resume
+
+    def _call_guard(self, left: int) -> tuple[Callable[[Any], bool] | None, int]:
+        """The next call's step callback and step limit.
+
+        A call that returned mid-stretch could not be resumed without changing bits (heyoka
+        starts each call with a step to its first point, and the double-length time is not a
+        grid point), so a signal ends the call after a whole step: by poisoning the
+        parameters (Watch), or else by a callback after each step."""
+        callback: Callable[[Any], bool] | None = self._callback
+        if callback is None and self._signals.active and not self._poisoning:
+            callback = SignalCallback(self._signals, self._zero)
+        probe = self._probe.limit
+        if probe is not None and isinstance(callback, ProgressCallback):
+            # Progress is reported once a step is kept: a cut probe is taken again.
+            callback = HeldProgress(callback)
+        return callback, left if probe is None else min(left, probe)
+
+    def _record(
+        self, out: np.ndarray, ended: outcomes.Ended, states: list, pars_rows: list
+    ) -> None:
+        """Keep a call's output rows, each with the parameters in force when it was computed."""
+        self.counters["steps"] += ended.steps
+        states.append(out)
+        given = self._rows_pars[: len(out)]
+        pars_rows += given + [self._pars.copy() for _ in range(len(out) - len(given))]
+        self.done += len(out)
+
+    def _goes_on(self, ended: outcomes.Ended, stuck: bool, budget: int) -> bool:
+        """After a call: whether the run goes on, or else why it stopped (status, message)."""
+        outcome, ta = ended.outcome, self._ta
+        if outcome == hy.taylor_outcome.time_limit:
+            return True
+        if stuck:
+            when = self._zero.at if self._zero.seen else ta.time
+            self.status, self.message = -1, outcomes.zero_step_message(self.model, when)
+            return False
+        if outcome == hy.taylor_outcome.step_limit:
+            self._out_of_steps(budget)
+            return False
+        if self._signals.received and self.status == 0:
+            return True  # reported at the top of the loop
+        if -len(self.terminal) <= int(outcome) <= -1:
+            return True  # a handler stopped the run (its status and message are set)
+        self.status = -1
+        if outcome == hy.taylor_outcome.err_nf_state:
+            # heyoka's time may itself be NaN then: name the last output time kept instead.
+            t = ta.time
+            when = t if math.isfinite(float(t)) else self.grid[max(self.done - 1, 0)]
+            self.message = outcomes.nonfinite(when)
+            if self.done == 0 and (cause := self._cause_at_start()) is not None:
+                raise cause  # the first step cannot be taken: nothing was integrated
+        elif outcome == hy.taylor_outcome.cb_stop:
+            self.message = f"stopped by the progress callback at t = {ta.time}"
+        else:
+            self.message = outcomes.other(outcome, ta.time)
+        return False
 
     def _cause_at_start(self) -> SceneError | None:
         """Why the first step could not be finite: the first of the model's expressions and
