@@ -9,8 +9,9 @@ structure filled with the member's numbers; and, for comparison, the family's fu
 its group key (the compiled code's cache key), and of ``prepare_members`` for all of them, as a
 sweep runs it (the family's table: every member's numbers computed at once,
 ``cayley_heyoka.core.structures.table_for``) and member by member (each validated scene's
-``model_for``, the path of a family without a table) — against the integration of one member by heyoka (the same scene's compiled integrator,
-``propagate_until`` from its initial state), the floor this Python is paid on top of.
+``model_for``, the path of a family without a table) — against the integration of one member
+by heyoka (the same scene's compiled integrator, ``propagate_until`` from its initial state),
+the floor this Python is paid on top of.
 """
 
 from __future__ import annotations
