@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import functools
 import hashlib
 import re
 import time
@@ -251,16 +252,19 @@ def along_motion(model: Model, expression: Any) -> Any:
 
 def cache_key(model: Model, options: IntegratorOptions) -> str:
     """The key of ``model``'s compiled code: equal keys share one compiled integrator."""
-    text = "\n".join(
-        [
-            model.code_key,
-            options.precision.name,
-            str(options.tolerance),
-            str(options.compact_mode),
-            str(options.high_accuracy),
-        ]
+    return _digest(
+        model.code_key,
+        options.precision.name,
+        str(options.tolerance),
+        str(options.compact_mode),
+        str(options.high_accuracy),
     )
-    return hashlib.sha256(text.encode()).hexdigest()
+
+
+@functools.lru_cache(maxsize=256)
+def _digest(*parts: str) -> str:
+    # Each run asks for its key: a model's code_key is one string object, its hash kept.
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
 
 def event_direction(spec: Any) -> Any:

@@ -180,12 +180,17 @@ class Propagation:
         self._first = model
         # A variant a terminal handler asked for (:class:`Handover`), taken over after the call.
         self._handover: Handover | None = None
-        first = evaluate_outputs(
-            self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1]
-        )
-        if not all(np.all(np.isfinite(v)) for k, v in first.items() if k not in model.unbounded):
-            raise start_failure(model, prec, initial, self._pars, self.grid[0], first)
-        check_sources(model, prec, initial, self._pars, self.grid[0])
+        # A model's numbers do not change: its start at a time is checked once.
+        started = model.__dict__.setdefault("_started", set())
+        if (prec.name, str(self.grid[0])) not in started:
+            first = evaluate_outputs(
+                self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1]
+            )
+            finite = (np.all(np.isfinite(v)) for k, v in first.items() if k not in model.unbounded)
+            if not all(finite):
+                raise start_failure(model, prec, initial, self._pars, self.grid[0], first)
+            check_sources(model, prec, initial, self._pars, self.grid[0])
+            started.add((prec.name, str(self.grid[0])))
         self._initial = initial
         self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)

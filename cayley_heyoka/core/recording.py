@@ -58,7 +58,17 @@ def start_values(model: Model, precision: Precision) -> tuple[np.ndarray, np.nda
     The scene's own numbers were checked in the run's precision when it was loaded; one that
     is not finite here (or that the precision cannot hold) is derived from them (μ Jₙ Rⁿ, a
     state converted from elements) and overflows it.
+
+    Copies: a model's numbers do not change, so they are converted once per precision.
     """
+    held = model.__dict__.setdefault("_start_values", {})
+    if precision.name not in held:
+        held[precision.name] = _start_values(model, precision)
+    state, values = held[precision.name]
+    return state.copy(), values.copy()
+
+
+def _start_values(model: Model, precision: Precision) -> tuple[np.ndarray, np.ndarray]:
     names = model.state_names
     state = _finite_array(
         precision,
