@@ -204,6 +204,8 @@ def evaluate_members(
     to = -(-n // width) * width
     if runs == 0 or n == 0:
         rows = np.empty((len(flat_outputs(model)), runs, n))
+    elif states.dtype == np.float64 and pars.dtype == np.float64:
+        rows = _evaluate_doubles(evaluator, states, pars, times, to)
     else:
         # In the precision's own arrays (a concatenation keeps heyoka's dtypes).
         if to != n:
@@ -220,17 +222,52 @@ def evaluate_members(
                 used = np.concatenate([used, np.repeat(used[:, -1:], to - n, axis=1)], axis=1)
             kwargs["pars"] = np.ascontiguousarray(used.reshape(runs * to, -1).T)
         rows = evaluator(np.ascontiguousarray(flat.T), **kwargs)
-        rows = rows.reshape(rows.shape[0], runs, to)[:, :, :n]
-    values: dict[str, np.ndarray] = {}
-    k = 0
-    for name, value in list(model.outputs.items()) + list(model.monitors.items()):
-        width_k = len(value) if isinstance(value, list) else 1
-        block = rows[k : k + width_k]
-        values[name] = (
-            block.transpose(1, 2, 0).copy() if isinstance(value, list) else block[0].copy()
-        )
-        k += width_k
-    return values
+        rows = rows.reshape(rows.shape[0], runs, to)
+    rows = rows[:, :, :n]
+    return {
+        name: rows[a:b].transpose(1, 2, 0).copy() if vector else rows[a].copy()
+        for name, a, b, vector in _output_layout(model)
+    }
+
+
+def _evaluate_doubles(evaluator: Any, states, pars, times, to: int) -> np.ndarray:
+    """The evaluator's rows ``(outputs, runs, to)`` of double arrays, its inputs written in place
+    (runs padded to ``to`` rows with their last row)."""
+    runs, n, d = states.shape
+    x = np.empty((d, runs, to))
+    x[:, :, :n] = states.transpose(2, 0, 1)
+    t = np.empty((runs, to))
+    t[:, :n] = times
+    if to != n:
+        x[:, :, n:] = states[:, -1:].transpose(2, 0, 1)
+        t[:, n:] = times[-1]
+    kwargs: dict[str, Any] = {"time": t.reshape(-1)}
+    held = evaluator.nparams
+    if held:
+        used = pars[..., :held]
+        p = np.empty((held, runs, to))
+        if used.ndim == 2:
+            p[:] = used.T[:, :, None]
+        else:
+            p[:, :, :n] = used.transpose(2, 0, 1)
+            if to != n:
+                p[:, :, n:] = used[:, -1:].transpose(2, 0, 1)
+        kwargs["pars"] = p.reshape(held, runs * to)
+    rows = evaluator(x.reshape(d, runs * to), **kwargs)
+    return rows.reshape(rows.shape[0], runs, to)
+
+
+def _output_layout(model: Model) -> list[tuple[str, int, int, bool]]:
+    """Each output and monitor's rows in the evaluator's result: (name, first, end, vector)."""
+    held = model.__dict__.get("_output_layout")
+    if held is None:
+        held, k = [], 0
+        for name, value in list(model.outputs.items()) + list(model.monitors.items()):
+            width = len(value) if isinstance(value, list) else 1
+            held.append((name, k, k + width, isinstance(value, list)))
+            k += width
+        model.__dict__["_output_layout"] = held
+    return held
 
 
 def _padded(times: np.ndarray, to: int) -> np.ndarray:
