@@ -257,7 +257,7 @@ def _vector(value: Any, name: str) -> list[tuple[str, Any]]:
 
 def _require(kind: _Kind, bad: Any, value: Any, message: str) -> None:
     """Raise ``ValueError(message, got …)`` if ``bad`` holds anywhere."""
-    if np.any(bad):
+    if bad if kind.multiprecision else np.any(bad):
         raise ValueError(f"{message}, got {kind.first(bad, value)}")
 
 
@@ -357,8 +357,7 @@ def cartesian_to_cayley(
     x, v, Sigma, angles = values[0:3], values[3:6], values[6], values[7:10]
     r = k.sqrt(dot(x, x))
     _require(k, r == 0, r, "position: r = |x| must be nonzero (the body is at the central mass)")
-    M01T = transpose(plane_matrix(*angles))
-    X, V = matvec(M01T, x), matvec(M01T, v)
+    X, V = _on_reference(k, angles, x), _on_reference(k, angles, v)
     H = cross(X, V)
     h = k.sqrt(dot(H, H))
     _require(
@@ -373,6 +372,19 @@ def cartesian_to_cayley(
     node = [k.cos(Theta), k.sin(Theta), 0 * h]
     u = k.angle(dot(X, cross(n, node)), dot(X, node))
     return CayleyState(r, dot(X, V) / r, u + Sigma, h, Theta, Sigma, Phi)
+
+
+def _on_reference(kind: _Kind, frame: Sequence[Any], x: Sequence[Any]) -> Vector:
+    """``M₀₁ᵀ x``: a vector of frame 0 in frame 1.
+
+    In mpmath with ``frame`` = (0, 0, 0), M₀₁ is the identity exactly (cos 0 = 1, sin 0 = 0),
+    and each component of ``M₀₁ᵀ x``, 0 + 1·x_i + 0·x_j + 0·x_k, is x_i rounded once to the
+    working precision (x is finite): what unary + gives, without the six cosines and sines and
+    the 27 products.
+    """
+    if kind.multiprecision and frame[0] == 0 and frame[1] == 0 and frame[2] == 0:
+        return [+c for c in x]
+    return matvec(transpose(plane_matrix(*frame)), x)
 
 
 def cayley_to_cartesian(
