@@ -224,20 +224,46 @@ def sin_phi(orbit: Orbit, t: Any) -> Any:
     x, v = initial_cartesian(orbit, t)
     H = vectors.cross(x, v)
     h = mpmath.sqrt(vectors.dot(H, H))
-    M01 = _plane_matrix_at(orbit.plane, t)
-    n = vectors.matvec(vectors.transpose(M01), [c / h for c in H])
+    n = [c / h for c in H]
+    if orbit.plane is not None:
+        # On the fixed frame M₀₁ is the identity exactly, and M₀₁ᵀ n gives back n's bits
+        # (each component 0 + 1·nᵢ + 0·nⱼ + 0·nₖ).
+        n = vectors.matvec(vectors.transpose(_plane_matrix_at(orbit.plane, t)), n)
     return mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
 
 
 def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
-    """Position and velocity at the start time, in mpmath at the current precision."""
+    """Position and velocity at the start time, in mpmath at the current precision.
+
+    Computed once an orbit, time and precision: a scene's validation, its start variant and
+    its initial state each ask.
+    """
+    # The result depends on t only through scene_mpf(t) at this precision (the reference
+    # plane's angles), and not at all for a position and velocity in a fixed frame.
+    moving = orbit.initial[0] == "elements" and orbit.plane is not None
+    key = ("initial_cartesian", mpmath.mp.prec, scene_mpf(t) if moving else None)
+    held = orbit.derived.get(key)
+    if held is None:
+        if len(orbit.derived) >= _DERIVED_HELD:
+            orbit.derived.clear()
+        held = orbit.derived[key] = _initial_cartesian(orbit, t)
+    x, v = held
+    return list(x), list(v)
+
+
+#: Derived values an orbit keeps (other times of a moving plane, other precisions).
+_DERIVED_HELD = 8
+
+
+def _initial_cartesian(orbit: Orbit, t: Any) -> tuple[tuple, tuple]:
     if orbit.initial[0] == "cartesian":
         _, x, v = orbit.initial
-        return [scene_mpf(c) for c in x], [scene_mpf(c) for c in v]
+        return tuple(scene_mpf(c) for c in x), tuple(scene_mpf(c) for c in v)
     values = {k: scene_mpf(v) for k, v in orbit.initial[1].items()}
-    return el.elements_to_cartesian(
+    x, v = el.elements_to_cartesian(
         el.Elements(**values), scene_mpf(orbit.mu), frame=plane_angles_at(orbit.plane, t)
     )
+    return tuple(x), tuple(v)
 
 
 def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list[str]:
