@@ -15,11 +15,14 @@ variant a Cayley run starts in (from sin Φ at the start).
 
 from __future__ import annotations
 
+import math
 import threading
 import weakref
+from fractions import Fraction
 from typing import Any
 
 import mpmath
+from mpmath import libmp
 
 from ..core import vectors
 from ..core.errors import SceneError
@@ -115,7 +118,12 @@ def start_variant(scene: Scene) -> str | None:
         return held[1]
     with mpmath.workdps(scene.integrator.precision.dps + GUARD_DIGITS):
         t0 = scene_mpf(start_time(scene))
-        low = sin_phi(orbit, t0) <= scene_mpf(orbit.equatorial_limit)
+        low = None
+        if orbit.plane is None:
+            x, v = initial_cartesian(orbit, t0)
+            low = at_most(x, v, exact_fraction(orbit.equatorial_limit))
+        if low is None:
+            low = sin_phi(orbit, t0) <= scene_mpf(orbit.equatorial_limit)
     variant = TILTED if low else LEVEL
     with _LOCK:
         if len(_VARIANTS) >= _VARIANTS_HELD:
@@ -230,6 +238,63 @@ def sin_phi(orbit: Orbit, t: Any) -> Any:
         # (each component 0 + 1·nᵢ + 0·nⱼ + 0·nₖ).
         n = vectors.matvec(vectors.transpose(_plane_matrix_at(orbit.plane, t)), n)
     return mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
+
+
+#: Magnitudes the double decision of :func:`at_most` takes for a coordinate: products and
+#: squares of these stay normal doubles, with no overflow.
+_SMALLEST, _LARGEST = 2.0**-250, 2.0**250
+
+
+def at_most(x: Any, v: Any, limit: Fraction) -> bool | None:
+    """Whether :func:`sin_phi` on the fixed frame, for the position and velocity ``x``, ``v``
+    (mpmath numbers, mpmath working at p ≥ 53 bits), is at most ``limit`` (in (0, ¼]), as
+    :func:`start_variant` compares them there: decided in double, or None where the double's
+    error bound does not decide and mpmath must.
+
+    Let S = |H₁₂|/|H| be sin Φ of the exact H = x × v, A = |x||v|/|H| ≥ 1 (the condition of
+    S, large for a nearly rectilinear motion), u = 2⁻⁵³ and w = 2⁻ᵖ ≤ u. Each computed
+    component of H errs by at most c·u(|xⱼvₖ| + |xₖvⱼ|) ≤ c·u|x||v| (Cauchy–Schwarz), with
+    c = 4.02 in double (x and v rounded to doubles, the products, the difference; with the
+    coordinates 0 or in [2⁻²⁵⁰, 2²⁵⁰] nothing overflows or leaves the normal range) and
+    c = 2.01·w/u in mpmath. The computed H is then within √3·c·u|x||v| of H, its direction
+    within π/2 times that over |H|, and sin Φ with it (|sin a − sin b| ≤ |a − b|): 11u·A in
+    double, 5.5w·A in mpmath. Normalising and the square root add at most 4.1u in double
+    (sqrt(p/q) of sums of squares; with q ≥ 2⁻⁸⁰⁰ a square that underflows does not count)
+    and 6.1w in mpmath (H/h, n₁² + n₂², the square root), to values at most 1: the double s
+    is within 16u·A of S, mpmath's sin Φ within 12w·A, and the limit in double and in mpmath
+    (each rounded once) within u/4 of the exact one. Â = |x||v|/√q computed in double is at
+    least A/2.01 where Â ≤ 2⁴⁰ (the error of H is then under a thousandth of |H|), so the
+    margin 2⁻⁴⁴·Â = 512u·Â exceeds 2.01·28u·Â + 4u, the errors above with the rounding of
+    s − limit: where s − limit is beyond the margin, mpmath's sin Φ is on the same side of
+    its limit.
+    """
+    xs = [_coordinate(c) for c in x]
+    vs = [_coordinate(c) for c in v]
+    if None in xs or None in vs:
+        return None
+    H = vectors.cross(xs, vs)
+    p = H[0] * H[0] + H[1] * H[1]
+    q = p + H[2] * H[2]
+    if not q >= 2.0**-800:
+        return None
+    bound = math.sqrt(vectors.dot(xs, xs)) * math.sqrt(vectors.dot(vs, vs)) / math.sqrt(q)
+    if not bound <= 2.0**40:
+        return None
+    gap = math.sqrt(p / q) - float(limit)
+    margin = bound * 2.0**-44
+    if gap > margin:
+        return False
+    if gap < -margin:
+        return True
+    return None
+
+
+def _coordinate(value: Any) -> float | None:
+    """An mpmath number as the nearest double, if it is 0 or in [2⁻²⁵⁰, 2²⁵⁰] (None if not)."""
+    if not value:
+        return 0.0
+    x = libmp.to_float(value._mpf_, False, libmp.round_nearest)
+    return x if _SMALLEST <= abs(x) <= _LARGEST else None
 
 
 def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
