@@ -15,6 +15,7 @@ variant a Cayley run starts in (from sin Φ at the start).
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import weakref
@@ -27,7 +28,7 @@ from mpmath import libmp
 from ..core import vectors
 from ..core.errors import SceneError
 from ..core.model import Numbers
-from ..core.precision import exact_fraction, scene_mpf
+from ..core.precision import Precision, exact_fraction, scene_mpf
 from ..core.scene import Scene
 from ..core.structures import MASK as _MASK
 from ..core.structures import structure_text
@@ -182,9 +183,9 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
                 ) from None
         values |= ellipse
     else:
-        state = initial_state(orbit, t0, dps, variant)
+        state = _initial_values(orbit, t0, dps, variant)
     if orbit.formulation in _TURNING:
-        turns, state[2] = revolutions.values(prec, state[2])
+        turns, state[2] = revolutions.values(prec, _text(state[2], dps))
         values |= turns
     if variant is not None:
         cos, sin = FRAME[variant]
@@ -192,7 +193,67 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
         values["orbit.theta_before"] = values["orbit.sigma_before"] = "0"
     if variant is not None or "equatorial" in scene.output.events:
         values["orbit.equatorial_limit"] = orbit.equatorial_limit
-    return Numbers([prec.number(v) for v in state], values)
+    return Numbers([_state_number(prec, c, dps) for c in state], values)
+
+
+def _text(value: Any, dps: int) -> str:
+    return value if isinstance(value, str) else mpmath.nstr(value, dps, strip_zeros=False)
+
+
+def _state_number(prec: Precision, value: Any, dps: int) -> Any:
+    """An initial value (mpmath's decimal text, or an mpmath number) in the run's precision,
+    as ``prec.number`` takes its text with ``dps`` digits (:func:`initial_state`)."""
+    if prec.kind == "double":
+        if isinstance(value, str):
+            # mpmath's text (digits, a point, an exponent) is the number decimal_text
+            # normalises it to, and float() rounds either correctly; prec.number refuses only
+            # what rounds to 0 or overflows.
+            x = float(value)
+        else:
+            x = nearest_double(value, dps)
+        if x and math.isfinite(x):
+            return x
+    return prec.number(_text(value, dps))
+
+
+def nearest_double(value: Any, digits: int) -> float | None:
+    """The double that the decimal text of ``value`` (an mpmath number) to ``digits``
+    significant digits rounds to, found without the text: None where that is not proved
+    (then convert the text).
+
+    ``mpmath.nstr(y, n)`` (``libmp.to_str``, mpmath 1.3) truncates |y| to at least n + 5
+    digits, which errs by under 6·10⁻⁽ⁿ⁺⁵⁾|y|, and rounds that to n digits, within half a unit
+    of the n-th: the text s it writes is within 0.51·10¹⁻ⁿ|y| of y, and the bound taken here,
+    10²⁻ⁿ|y| < 10²⁻ⁿ·2ᵉ for |y| < 2ᵉ, has room to spare. ``float(s)``, correctly rounded, is
+    then the double nearest y wherever no rounding boundary (a midpoint between neighbouring
+    doubles) lies within the bound of y. With |y| = m·2ᵏ and m = q·2ʲ + r (q of 53 bits,
+    0 ≤ r < 2ʲ, half = 2ʲ⁻¹), the boundaries nearest y are q·2ʲ + half (between q and q + 1)
+    and, below q, q·2ʲ − half (q·2ʲ − half/2 where q = 2⁵², the first of its binade): y is at
+    least min(|r − half|, half/2)·2ᵏ from either. A y of at most 53 bits is a double, at
+    least 2ᵉ⁻⁵⁵ from a boundary, beyond the bound for n ≥ 19. Only normal, finite doubles are
+    taken (there the text's own checks refuse nothing).
+    """
+    sign, man, exp, bc = value._mpf_
+    if not man:  # zero, which the text writes as 0.0; or not finite
+        return 0.0 if value._mpf_ == libmp.fzero else None
+    top = exp + bc  # 2^(top - 1) <= |y| < 2^top
+    if not -1020 <= top <= 1023 or digits < 19:
+        return None
+    shift = bc - 53
+    if shift <= 0:
+        x = math.ldexp(int(man), exp)
+    else:
+        q, r = divmod(int(man), 1 << shift)
+        half = 1 << (shift - 1)
+        if min(abs(r - half), half >> 1) * _tens(digits - 2) <= 1 << bc:
+            return None
+        x = math.ldexp(q + (r > half), exp + shift)
+    return -x if sign else x
+
+
+@functools.lru_cache(maxsize=16)
+def _tens(n: int) -> int:
+    return 10**n
 
 
 def plane_numbers(motion: PlaneMotion | None) -> dict[str, Any]:
@@ -335,6 +396,11 @@ def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) ->
     """The formulation's initial state as decimal text with ``dps`` digits (not ``encke``,
     whose state is the deviation from its initial osculating ellipse: :func:`numbers`);
     Cayley's angles on the working frame of ``variant`` (:mod:`.tilt`) if given."""
+    return [_text(c, dps) for c in _initial_values(orbit, t, dps, variant)]
+
+
+def _initial_values(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list:
+    """:func:`initial_state` as mpmath numbers with the guard digits of ``dps``."""
     if orbit.formulation == "encke":
         raise ValueError("the encke state is the deviation from its ellipse: build the model")
     with mpmath.workdps(dps):
@@ -353,7 +419,7 @@ def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) ->
                 values += list(angles)
             else:
                 values += _plane_quaternion(frame, (s.Theta, s.Sigma, s.Phi))
-        return [mpmath.nstr(c, dps, strip_zeros=False) for c in values]
+        return values
 
 
 def plane_angles(motion: PlaneMotion, t: Any, value: Any) -> tuple[tuple, tuple]:
