@@ -1,15 +1,16 @@
 """The short cuts of an orbit's numbers (cayley_heyoka.orbit.numbers) give the bits of the
 computations they stand for: a double from an mpmath number without its decimal text, the
-start variant decided from doubles, the fixed frame's rotation left out, the start's position
-and velocity computed once an orbit. Near the edges where each stops deciding (a double
-rounding boundary, sin Φ at the limit, a nearly rectilinear orbit) the long way is taken, and
-its answer is the one the short cut would not have guessed."""
+start variant decided from doubles, the fixed frame's rotation left out, cos and sin of an
+angle at once, the start's position and velocity computed once an orbit. Near the edges where
+each stops deciding (a double rounding boundary, sin Φ at the limit, a nearly rectilinear
+orbit) the long way is taken: there the text's double is not always the nearest one."""
 
 from __future__ import annotations
 
 import copy
 import random
 import struct
+from types import SimpleNamespace
 from typing import Any
 
 import mpmath
@@ -241,6 +242,22 @@ def test_cayley_state_and_sin_phi_on_the_fixed_frame(monkeypatch: pytest.MonkeyP
             assert numbers.sin_phi(orbit, 0)._mpf_ == want._mpf_
 
 
+@pytest.mark.parametrize("prec", [53, 113, 200, 1000])
+def test_cos_sin_is_cos_and_sin(prec: int) -> None:
+    """mpmath's cos_sin, which the frames and Kepler's equation take in mpmath, gives the bits
+    of cos and sin: for tiny, ordinary, large and huge angles."""
+    rng = random.Random(prec)
+    with mpmath.workprec(prec):
+        angles = [mpmath.mpf(0), mpmath.mpf(2) ** -2000, mpmath.pi / 2, -mpmath.pi]
+        angles += [mpmath.mpf(rng.uniform(-4, 4)) * mpmath.mpf(10) ** rng.randint(-40, 40)]
+        angles += [mpmath.mpf(rng.uniform(-4, 4)) for _ in range(50)]
+        for a in angles:
+            c, s = mpmath.cos_sin(a)
+            assert (c._mpf_, s._mpf_) == (mpmath.cos(a)._mpf_, mpmath.sin(a)._mpf_)
+            f = frames.functions_for(a)
+            assert [x._mpf_ for x in f.cos_sin(a)] == [c._mpf_, s._mpf_]
+
+
 # ---------------------------------------------------------------------- once an orbit
 def test_initial_cartesian_once_an_orbit_time_and_precision() -> None:
     elements = {
@@ -341,8 +358,8 @@ def _numbers_of(data: list[dict]) -> list[Any]:
 
 def test_numbers_of_random_orbits_as_the_long_way(monkeypatch: pytest.MonkeyPatch) -> None:
     """Every short cut off (each double from its text, the variant from mpmath, the fixed
-    frame rotated, the start computed at each ask): the same structures and numbers, bit for
-    bit, in double, quad and multiprecision."""
+    frame rotated, the start computed at each ask, cos and sin apart): the same structures and
+    numbers, bit for bit, in double, quad and multiprecision."""
     rng = random.Random(12)
     data = [random_scene(rng) for _ in range(80)]
     quick = _numbers_of(data)
@@ -361,6 +378,14 @@ def test_numbers_of_random_orbits_as_the_long_way(monkeypatch: pytest.MonkeyPatc
         "_on_reference",
         lambda kind, frame, x: vectors.matvec(vectors.transpose(kepler.plane_matrix(*frame)), x),
     )
+    each = frames.functions_for
+
+    def apart(*values: Any) -> SimpleNamespace:
+        f = each(*values)
+        return SimpleNamespace(**{**vars(f), "cos_sin": lambda a: (f.cos(a), f.sin(a))})
+
+    monkeypatch.setattr(frames, "functions_for", apart)
+    monkeypatch.setattr(kepler, "functions_for", apart)
     slow = _numbers_of(data)
     assert sum(isinstance(q, tuple) for q in quick) > 70
     assert quick == slow
