@@ -204,6 +204,7 @@ def _state_number(prec: Precision, value: Any, dps: int) -> Any:
     """An initial value (mpmath's decimal text, or an mpmath number) in the run's precision,
     as ``prec.number`` takes its text with ``dps`` digits (:func:`initial_state`)."""
     if prec.kind == "double":
+        x: float | None
         if isinstance(value, str):
             # mpmath's text (digits, a point, an exponent) is the number decimal_text
             # normalises it to, and float() rounds either correctly; prec.number refuses only
