@@ -367,30 +367,28 @@ def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
     """
     # The result depends on t only through scene_mpf(t) at this precision (the reference
     # plane's angles), and not at all for a position and velocity in a fixed frame.
-    moving = orbit.initial[0] == "elements" and orbit.plane is not None
+    moving = orbit.plane is not None and orbit.initial[0] == "elements"
     key = ("initial_cartesian", mpmath.mp.prec, scene_mpf(t) if moving else None)
     held = orbit.derived.get(key)
     if held is None:
         if len(orbit.derived) >= _DERIVED_HELD:
             orbit.derived.clear()
         held = orbit.derived[key] = _initial_cartesian(orbit, t)
-    x, v = held
-    return list(x), list(v)
+    return held[0][:], held[1][:]
 
 
 #: Derived values an orbit keeps (other times of a moving plane, other precisions).
 _DERIVED_HELD = 8
 
 
-def _initial_cartesian(orbit: Orbit, t: Any) -> tuple[tuple, tuple]:
+def _initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
     if orbit.initial[0] == "cartesian":
         _, x, v = orbit.initial
-        return tuple(scene_mpf(c) for c in x), tuple(scene_mpf(c) for c in v)
+        return [scene_mpf(c) for c in x], [scene_mpf(c) for c in v]
     values = {k: scene_mpf(v) for k, v in orbit.initial[1].items()}
-    x, v = el.elements_to_cartesian(
+    return el.elements_to_cartesian(
         el.Elements(**values), scene_mpf(orbit.mu), frame=plane_angles_at(orbit.plane, t)
     )
-    return tuple(x), tuple(v)
 
 
 def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list[str]:

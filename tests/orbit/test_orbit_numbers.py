@@ -371,7 +371,7 @@ def test_numbers_of_random_orbits_as_the_long_way(monkeypatch: pytest.MonkeyPatc
     monkeypatch.setattr(
         numbers,
         "initial_cartesian",
-        lambda orbit, t: tuple(map(list, numbers._initial_cartesian(orbit, t))),
+        numbers._initial_cartesian,
     )
     monkeypatch.setattr(
         kepler,
