@@ -149,6 +149,7 @@ class _Kind:
     multiprecision: bool
     sin: Callable[[Any], Any]
     cos: Callable[[Any], Any]
+    cos_sin: Callable[[Any], tuple[Any, Any]]
     sqrt: Callable[[Any], Any]
     atan2: Callable[[Any, Any], Any]
     ceil: Callable[[Any], Any]
@@ -217,6 +218,7 @@ def _prepare(named: list[tuple[str, Any]]) -> tuple[_Kind, list[Any]]:
             True,
             f.sin,
             f.cos,
+            f.cos_sin,
             f.sqrt,
             f.atan2,
             mpmath.ceil,
@@ -244,7 +246,7 @@ def _prepare(named: list[tuple[str, Any]]) -> tuple[_Kind, list[Any]]:
     values = [a[()] for a in arrays]
     f = functions_for(np.float64(1))
     eps = float(np.finfo(float).eps)
-    kind = _Kind(False, f.sin, f.cos, f.sqrt, f.atan2, np.ceil, np.sign, np.pi, eps, 53)
+    kind = _Kind(False, f.sin, f.cos, f.cos_sin, f.sqrt, f.atan2, np.ceil, np.sign, np.pi, eps, 53)
     return kind, values
 
 
@@ -257,7 +259,7 @@ def _vector(value: Any, name: str) -> list[tuple[str, Any]]:
 
 def _require(kind: _Kind, bad: Any, value: Any, message: str) -> None:
     """Raise ``ValueError(message, got …)`` if ``bad`` holds anywhere."""
-    if np.any(bad):
+    if bad if kind.multiprecision else np.any(bad):
         raise ValueError(f"{message}, got {kind.first(bad, value)}")
 
 
@@ -273,9 +275,10 @@ def _require_ellipse(kind: _Kind, bad: Any, e: Any) -> None:
         )
 
 
-def _true_anomaly(kind: _Kind, E: Any, e: Any) -> Any:
-    """``f`` from ``tan(f/2) = √((1 + e)/(1 − e)) tan(E/2)``, in ``(−π, π]`` for ``E`` there."""
-    return 2 * kind.atan2(kind.sqrt(1 + e) * kind.sin(E / 2), kind.sqrt(1 - e) * kind.cos(E / 2))
+def _true_anomaly(kind: _Kind, half: tuple[Any, Any], e: Any) -> Any:
+    """``f`` from ``tan(f/2) = √((1 + e)/(1 − e)) tan(E/2)``, in ``(−π, π]`` for ``E`` there;
+    ``half`` is (cos, sin) of E/2."""
+    return 2 * kind.atan2(kind.sqrt(1 + e) * half[1], kind.sqrt(1 - e) * half[0])
 
 
 def _solve_kepler(kind: _Kind, M: Any, e: Any) -> Any:
@@ -296,10 +299,11 @@ def _solve_kepler(kind: _Kind, M: Any, e: Any) -> Any:
     done = zero != 0
     previous = E
     for _ in range(100 + 2 * kind.bits):
-        g = E - e * kind.sin(E) - M
+        cos_E, sin_E = kind.cos_sin(E)
+        g = E - e * sin_E - M
         lo = kind.where(g < 0, E, lo)
         hi = kind.where(g > 0, E, hi)
-        slope = 1 - e * kind.cos(E)
+        slope = 1 - e * cos_E
         correction = g / slope
         newton = E - correction
         # Or Newton no longer moves E, or steps back to the E before: with subnormal E and M
@@ -357,8 +361,7 @@ def cartesian_to_cayley(
     x, v, Sigma, angles = values[0:3], values[3:6], values[6], values[7:10]
     r = k.sqrt(dot(x, x))
     _require(k, r == 0, r, "position: r = |x| must be nonzero (the body is at the central mass)")
-    M01T = transpose(plane_matrix(*angles))
-    X, V = matvec(M01T, x), matvec(M01T, v)
+    X, V = _on_reference(k, angles, x), _on_reference(k, angles, v)
     H = cross(X, V)
     h = k.sqrt(dot(H, H))
     _require(
@@ -370,9 +373,22 @@ def cartesian_to_cayley(
     n = [c / h for c in H]
     Phi = k.angle(k.sqrt(n[0] * n[0] + n[1] * n[1]), n[2])
     Theta = k.where((n[0] == 0) & (n[1] == 0), 0 * h, k.angle(n[0], -n[1]))
-    node = [k.cos(Theta), k.sin(Theta), 0 * h]
+    node = [*k.cos_sin(Theta), 0 * h]
     u = k.angle(dot(X, cross(n, node)), dot(X, node))
     return CayleyState(r, dot(X, V) / r, u + Sigma, h, Theta, Sigma, Phi)
+
+
+def _on_reference(kind: _Kind, frame: Sequence[Any], x: Sequence[Any]) -> Vector:
+    """``M₀₁ᵀ x``: a vector of frame 0 in frame 1.
+
+    In mpmath with ``frame`` = (0, 0, 0), M₀₁ is the identity exactly (cos 0 = 1, sin 0 = 0),
+    and each component of ``M₀₁ᵀ x``, 0 + 1·x_i + 0·x_j + 0·x_k, is x_i rounded once to the
+    working precision (x is finite): what unary + gives, without the six cosines and sines and
+    the 27 products.
+    """
+    if kind.multiprecision and frame[0] == 0 and frame[1] == 0 and frame[2] == 0:
+        return [+c for c in x]
+    return matvec(transpose(plane_matrix(*frame)), x)
 
 
 def cayley_to_cartesian(
@@ -456,7 +472,7 @@ def cayley_to_elements(state: CayleyState, mu: Any) -> Elements:
     _require_ellipse(k, e >= 1, e)
     u = k.reduce(rho - Sigma)
     E = k.where(e == 0, u, k.angle(e_sin_E, e_cos_E))
-    f = k.where(e == 0, u, _true_anomaly(k, E, e))
+    f = k.where(e == 0, u, _true_anomaly(k, k.cos_sin(E / 2), e))
     return Elements(
         a=1 / inverse_a,
         e=e,
@@ -510,9 +526,10 @@ def elements_to_cayley(elements: Elements, mu: Any, sigma: Any = 0) -> CayleySta
     )
     _require(k, (i < 0) | (i > k.pi), i, "inclination: must be in [0, pi]")
     E = _solve_kepler(k, k.reduce(M), e)
-    f = _true_anomaly(k, E, e)
+    half = k.cos_sin(E / 2)
+    f = _true_anomaly(k, half, e)
     # 1 − e cos E and 1 − e² rewritten so that nothing cancels as e → 1 near pericentre.
-    half_sin = k.sin(E / 2)
+    half_sin = half[1]
     r = a * ((1 - e) + 2 * e * half_sin * half_sin)
     p = a * (1 - e) * (1 + e)
     u = k.reduce(omega + f)

@@ -15,16 +15,20 @@ variant a Cayley run starts in (from sin Φ at the start).
 
 from __future__ import annotations
 
+import functools
+import math
 import threading
 import weakref
+from fractions import Fraction
 from typing import Any
 
 import mpmath
+from mpmath import libmp
 
 from ..core import vectors
 from ..core.errors import SceneError
 from ..core.model import Numbers
-from ..core.precision import exact_fraction, scene_mpf
+from ..core.precision import Precision, exact_fraction, scene_mpf
 from ..core.scene import Scene
 from ..core.structures import MASK as _MASK
 from ..core.structures import structure_text
@@ -115,7 +119,12 @@ def start_variant(scene: Scene) -> str | None:
         return held[1]
     with mpmath.workdps(scene.integrator.precision.dps + GUARD_DIGITS):
         t0 = scene_mpf(start_time(scene))
-        low = sin_phi(orbit, t0) <= scene_mpf(orbit.equatorial_limit)
+        low = None
+        if orbit.plane is None:
+            x, v = initial_cartesian(orbit, t0)
+            low = at_most(x, v, exact_fraction(orbit.equatorial_limit))
+        if low is None:
+            low = sin_phi(orbit, t0) <= scene_mpf(orbit.equatorial_limit)
     variant = TILTED if low else LEVEL
     with _LOCK:
         if len(_VARIANTS) >= _VARIANTS_HELD:
@@ -174,9 +183,9 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
                 ) from None
         values |= ellipse
     else:
-        state = initial_state(orbit, t0, dps, variant)
+        state = _initial_values(orbit, t0, dps, variant)
     if orbit.formulation in _TURNING:
-        turns, state[2] = revolutions.values(prec, state[2])
+        turns, state[2] = revolutions.values(prec, _text(state[2], dps))
         values |= turns
     if variant is not None:
         cos, sin = FRAME[variant]
@@ -184,7 +193,68 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
         values["orbit.theta_before"] = values["orbit.sigma_before"] = "0"
     if variant is not None or "equatorial" in scene.output.events:
         values["orbit.equatorial_limit"] = orbit.equatorial_limit
-    return Numbers([prec.number(v) for v in state], values)
+    return Numbers([_state_number(prec, c, dps) for c in state], values)
+
+
+def _text(value: Any, dps: int) -> str:
+    return value if isinstance(value, str) else mpmath.nstr(value, dps, strip_zeros=False)
+
+
+def _state_number(prec: Precision, value: Any, dps: int) -> Any:
+    """An initial value (mpmath's decimal text, or an mpmath number) in the run's precision,
+    as ``prec.number`` takes its text with ``dps`` digits (:func:`initial_state`)."""
+    if prec.kind == "double":
+        x: float | None
+        if isinstance(value, str):
+            # mpmath's text (digits, a point, an exponent) is the number decimal_text
+            # normalises it to, and float() rounds either correctly; prec.number refuses only
+            # what rounds to 0 or overflows.
+            x = float(value)
+        else:
+            x = nearest_double(value, dps)
+        if x and math.isfinite(x):
+            return x
+    return prec.number(_text(value, dps))
+
+
+def nearest_double(value: Any, digits: int) -> float | None:
+    """The double that the decimal text of ``value`` (an mpmath number) to ``digits``
+    significant digits rounds to, found without the text: None where that is not proved
+    (then convert the text).
+
+    ``mpmath.nstr(y, n)`` (``libmp.to_str``, mpmath 1.3) truncates |y| to at least n + 5
+    digits, which errs by under 6·10⁻⁽ⁿ⁺⁵⁾|y|, and rounds that to n digits, within half a unit
+    of the n-th: the text s it writes is within 0.51·10¹⁻ⁿ|y| of y, and the bound taken here,
+    10²⁻ⁿ|y| < 10²⁻ⁿ·2ᵉ for |y| < 2ᵉ, has room to spare. ``float(s)``, correctly rounded, is
+    then the double nearest y wherever no rounding boundary (a midpoint between neighbouring
+    doubles) lies within the bound of y. With |y| = m·2ᵏ and m = q·2ʲ + r (q of 53 bits,
+    0 ≤ r < 2ʲ, half = 2ʲ⁻¹), the boundaries nearest y are q·2ʲ + half (between q and q + 1)
+    and, below q, q·2ʲ − half (q·2ʲ − half/2 where q = 2⁵², the first of its binade): y is at
+    least min(|r − half|, half/2)·2ᵏ from either. A y of at most 53 bits is a double, at
+    least 2ᵉ⁻⁵⁵ from a boundary, beyond the bound for n ≥ 19. Only normal, finite doubles are
+    taken (there the text's own checks refuse nothing).
+    """
+    sign, man, exp, bc = value._mpf_
+    if not man:  # zero, which the text writes as 0.0; or not finite
+        return 0.0 if value._mpf_ == libmp.fzero else None
+    top = exp + bc  # 2^(top - 1) <= |y| < 2^top
+    if not -1020 <= top <= 1023 or digits < 19:
+        return None
+    shift = bc - 53
+    if shift <= 0:
+        x = math.ldexp(int(man), exp)
+    else:
+        q, r = divmod(int(man), 1 << shift)
+        half = 1 << (shift - 1)
+        if min(abs(r - half), half >> 1) * _tens(digits - 2) <= 1 << bc:
+            return None
+        x = math.ldexp(q + (r > half), exp + shift)
+    return -x if sign else x
+
+
+@functools.lru_cache(maxsize=16)
+def _tens(n: int) -> int:
+    return 10**n
 
 
 def plane_numbers(motion: PlaneMotion | None) -> dict[str, Any]:
@@ -224,13 +294,94 @@ def sin_phi(orbit: Orbit, t: Any) -> Any:
     x, v = initial_cartesian(orbit, t)
     H = vectors.cross(x, v)
     h = mpmath.sqrt(vectors.dot(H, H))
-    M01 = _plane_matrix_at(orbit.plane, t)
-    n = vectors.matvec(vectors.transpose(M01), [c / h for c in H])
+    n = [c / h for c in H]
+    if orbit.plane is not None:
+        # On the fixed frame M₀₁ is the identity exactly, and M₀₁ᵀ n gives back n's bits
+        # (each component 0 + 1·nᵢ + 0·nⱼ + 0·nₖ).
+        n = vectors.matvec(vectors.transpose(_plane_matrix_at(orbit.plane, t)), n)
     return mpmath.sqrt(n[0] ** 2 + n[1] ** 2)
 
 
+#: Magnitudes the double decision of :func:`at_most` takes for a coordinate: products and
+#: squares of these stay normal doubles, with no overflow.
+_SMALLEST, _LARGEST = 2.0**-250, 2.0**250
+
+
+def at_most(x: Any, v: Any, limit: Fraction) -> bool | None:
+    """Whether :func:`sin_phi` on the fixed frame, for the position and velocity ``x``, ``v``
+    (mpmath numbers, mpmath working at p ≥ 53 bits), is at most ``limit`` (in (0, ¼]), as
+    :func:`start_variant` compares them there: decided in double, or None where the double's
+    error bound does not decide and mpmath must.
+
+    Let S = |H₁₂|/|H| be sin Φ of the exact H = x × v, A = |x||v|/|H| ≥ 1 (the condition of
+    S, large for a nearly rectilinear motion), u = 2⁻⁵³ and w = 2⁻ᵖ ≤ u. Each computed
+    component of H errs by at most c·u(|xⱼvₖ| + |xₖvⱼ|) ≤ c·u|x||v| (Cauchy–Schwarz), with
+    c = 4.02 in double (x and v rounded to doubles, the products, the difference; with the
+    coordinates 0 or in [2⁻²⁵⁰, 2²⁵⁰] nothing overflows or leaves the normal range) and
+    c = 2.01·w/u in mpmath. The computed H is then within √3·c·u|x||v| of H, its direction
+    within π/2 times that over |H|, and sin Φ with it (|sin a − sin b| ≤ |a − b|): 11u·A in
+    double, 5.5w·A in mpmath. Normalising and the square root add at most 4.1u in double
+    (sqrt(p/q) of sums of squares; with q ≥ 2⁻⁸⁰⁰ a square that underflows does not count)
+    and 6.1w in mpmath (H/h, n₁² + n₂², the square root), to values at most 1: the double s
+    is within 16u·A of S, mpmath's sin Φ within 12w·A, and the limit in double and in mpmath
+    (each rounded once) within u/4 of the exact one. Â = |x||v|/√q computed in double is at
+    least A/2.01 where Â ≤ 2⁴⁰ (the error of H is then under a thousandth of |H|), so the
+    margin 2⁻⁴⁴·Â = 512u·Â exceeds 2.01·28u·Â + 4u, the errors above with the rounding of
+    s − limit: where s − limit is beyond the margin, mpmath's sin Φ is on the same side of
+    its limit.
+    """
+    xs = [_coordinate(c) for c in x]
+    vs = [_coordinate(c) for c in v]
+    if None in xs or None in vs:
+        return None
+    H = vectors.cross(xs, vs)
+    p = H[0] * H[0] + H[1] * H[1]
+    q = p + H[2] * H[2]
+    if not q >= 2.0**-800:
+        return None
+    bound = math.sqrt(vectors.dot(xs, xs)) * math.sqrt(vectors.dot(vs, vs)) / math.sqrt(q)
+    if not bound <= 2.0**40:
+        return None
+    gap = math.sqrt(p / q) - float(limit)
+    margin = bound * 2.0**-44
+    if gap > margin:
+        return False
+    if gap < -margin:
+        return True
+    return None
+
+
+def _coordinate(value: Any) -> float | None:
+    """An mpmath number as the nearest double, if it is 0 or in [2⁻²⁵⁰, 2²⁵⁰] (None if not)."""
+    if not value:
+        return 0.0
+    x = libmp.to_float(value._mpf_, False, libmp.round_nearest)
+    return x if _SMALLEST <= abs(x) <= _LARGEST else None
+
+
 def initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
-    """Position and velocity at the start time, in mpmath at the current precision."""
+    """Position and velocity at the start time, in mpmath at the current precision.
+
+    Computed once an orbit, time and precision: a scene's validation, its start variant and
+    its initial state each ask.
+    """
+    # The result depends on t only through scene_mpf(t) at this precision (the reference
+    # plane's angles), and not at all for a position and velocity in a fixed frame.
+    moving = orbit.plane is not None and orbit.initial[0] == "elements"
+    key = ("initial_cartesian", mpmath.mp.prec, scene_mpf(t) if moving else None)
+    held = orbit.derived.get(key)
+    if held is None:
+        if len(orbit.derived) >= _DERIVED_HELD:
+            orbit.derived.clear()
+        held = orbit.derived[key] = _initial_cartesian(orbit, t)
+    return held[0][:], held[1][:]
+
+
+#: Derived values an orbit keeps (other times of a moving plane, other precisions).
+_DERIVED_HELD = 8
+
+
+def _initial_cartesian(orbit: Orbit, t: Any) -> tuple[list, list]:
     if orbit.initial[0] == "cartesian":
         _, x, v = orbit.initial
         return [scene_mpf(c) for c in x], [scene_mpf(c) for c in v]
@@ -244,6 +395,11 @@ def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) ->
     """The formulation's initial state as decimal text with ``dps`` digits (not ``encke``,
     whose state is the deviation from its initial osculating ellipse: :func:`numbers`);
     Cayley's angles on the working frame of ``variant`` (:mod:`.tilt`) if given."""
+    return [_text(c, dps) for c in _initial_values(orbit, t, dps, variant)]
+
+
+def _initial_values(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list:
+    """:func:`initial_state` as mpmath numbers with the guard digits of ``dps``."""
     if orbit.formulation == "encke":
         raise ValueError("the encke state is the deviation from its ellipse: build the model")
     with mpmath.workdps(dps):
@@ -262,7 +418,7 @@ def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) ->
                 values += list(angles)
             else:
                 values += _plane_quaternion(frame, (s.Theta, s.Sigma, s.Phi))
-        return [mpmath.nstr(c, dps, strip_zeros=False) for c in values]
+        return values
 
 
 def plane_angles(motion: PlaneMotion, t: Any, value: Any) -> tuple[tuple, tuple]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
@@ -80,6 +80,11 @@ class Orbit:
     equatorial_limit: Number
     perturbations: tuple
     plane: PlaneMotion | None
+    #: Values derived from the fields, by what they are and the precision they were computed
+    #: in (:func:`.numbers.initial_cartesian`: the validation, the start variant and the
+    #: initial state each need the start's position and velocity). Not part of the orbit's
+    #: value: equality, hashing and ``dataclasses.replace`` ignore it.
+    derived: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def parse(cls, tables: Mapping[str, Any]) -> Orbit:
