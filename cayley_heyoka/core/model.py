@@ -239,6 +239,11 @@ class Model:
         Compile in compact mode unless the scene says otherwise: the family knows that this
         system's code is large for what it computes (heyoka's non-compact code grows with the
         expression's size, and its compile time faster), where :meth:`size` would not tell.
+    decomposition
+        The length of heyoka's Taylor decomposition of the system as the family counts it
+        (variables, distinct operations, right-hand sides), or None: a measure of the code
+        to compile for right-hand sides that share subexpressions, which :meth:`size` counts
+        at every use (:func:`.compiler.use_compact_mode`).
     unbounded
         Outputs whose infinite value is a value, not a failure (the Cayley–Rodrigues λ, μ, ν
         at a half-turn): a run never stops for them, nor is refused when they start infinite.
@@ -263,6 +268,7 @@ class Model:
     events: list[EventSpec] = field(default_factory=list)
     terminal: list[TerminalSpec] = field(default_factory=list)
     compact: bool = False
+    decomposition: int | None = None
     unbounded: tuple[str, ...] = ()
     variant: str = ""
     variants: Callable[[str], Model] | None = None
