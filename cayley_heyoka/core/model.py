@@ -281,7 +281,12 @@ class Model:
     @property
     def state_names(self) -> list[str]:
         """Names of the integrated variables."""
-        return [str(v) for v, _ in self.system]
+        return list(self._state_names)
+
+    @functools.cached_property
+    def _state_names(self) -> tuple[str, ...]:
+        # Printed once per model (~1 µs a variable, read several times by each run).
+        return tuple(str(v) for v, _ in self.system)
 
     def structure_key(self) -> str:
         """Text that identifies the compiled code: equations and events, not the numbers."""
@@ -362,7 +367,7 @@ class Model:
             events=list(self.events),
             terminal=list(self.terminal),
         )
-        for key in ("code_key", "_held"):  # the structure's, computed at most once
+        for key in ("code_key", "_held", "_state_names"):  # the structure's, computed once
             if key in self.__dict__:
                 model.__dict__[key] = self.__dict__[key]
         return model
