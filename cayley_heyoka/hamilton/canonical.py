@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from fractions import Fraction
+from typing import TypeAlias
 
 import heyoka as hy
 
@@ -22,7 +23,7 @@ from ..core.expressions import FUNCTIONS, rebuild
 from ..core.model import ParTable
 from ..core.symbolic import Algebra, Unsupported
 
-Expr = hy.expression
+Expr: TypeAlias = hy.expression
 
 
 def canonical_equations(

@@ -105,7 +105,7 @@ def _canonical(ham: Hamiltonian, H, eta, varpi, pars: ParTable) -> tuple[list, i
     if ham.text is not None:
         texts = [(ham.text, "hamiltonian.H")]
     else:
-        texts = [(ham.split[0], "hamiltonian.H1"), (ham.split[1], "hamiltonian.H2")]
+        texts = list(zip(ham.split or (), ("hamiltonian.H1", "hamiltonian.H2"), strict=True))
     symbols = {str(v): v for v in (*eta, *varpi)}
     return shared_canonical_equations(H, texts, symbols, pars, eta, varpi)
 
