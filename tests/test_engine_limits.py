@@ -65,6 +65,18 @@ def _orbit(formulation: str) -> ch.Scene:
     return ch.Scene.from_dict(data)
 
 
+def _henon_heiles(stop: str) -> ch.Scene:
+    """Hénon–Heiles below its escape energy: equations of integers, no runtime parameter."""
+    H = "(varpi1**2 + varpi2**2)/2 + (eta1**2 + eta2**2)/2 + eta1**2*eta2 - eta2**3/3"
+    return ch.Scene.from_dict(
+        {
+            "hamiltonian": {"H": H},
+            "initial": {"eta": ["0", "0.1"], "varpi": ["0.35", "0"]},
+            "output": {"times": {"start": "0", "stop": stop, "count": 801}},
+        }
+    )
+
+
 @pytest.mark.parametrize(
     "build",
     [
@@ -72,8 +84,9 @@ def _orbit(formulation: str) -> ch.Scene:
         lambda: _scene("quad"),
         lambda: _orbit("encke"),  # time-dependent forces, Encke's rectifications
         lambda: _orbit("cayley"),
+        lambda: _henon_heiles("2000"),  # watched without a callback, its state poisoned
     ],
-    ids=["heavy-top-double", "heavy-top-quad", "orbit-encke", "orbit-cayley"],
+    ids=["heavy-top-double", "heavy-top-quad", "orbit-encke", "orbit-cayley", "hamiltonian"],
 )
 def test_watching_for_signals_changes_no_bit(build):
     """The main thread's run (a callback after each step, watching for signals) and a run
@@ -135,13 +148,22 @@ def test_interrupt_keeps_what_was_computed():
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
-def test_an_interrupt_without_callback_keeps_the_uninterrupted_bits():
+@pytest.mark.parametrize(
+    "build",
+    [
+        lambda: _scene(output={"times": {"start": "0", "stop": "200000", "count": 801}}),
+        lambda: _henon_heiles("1000000"),
+    ],
+    ids=["parameters", "state"],
+)
+def test_an_interrupt_without_callback_keeps_the_uninterrupted_bits(build):
     """In the main thread, without a progress callback, heyoka steps in the engine's watch
-    thread and a signal poisons the parameters: the rows kept are the uninterrupted run's,
-    the parameters are restored, and the next run of the scene is whole."""
+    thread and a signal poisons the parameters (or, for equations without any, the state):
+    the rows kept are the uninterrupted run's, the parameters are restored, and the next run
+    of the scene is whole."""
     # Long enough (~1 s of stepping) that a signal sent halfway lands inside the run on a busy
     # machine too (at 0.13 s the run sometimes ended before the timer fired).
-    scene = _scene(output={"times": {"start": "0", "stop": "200000", "count": 801}})
+    scene = build()
     whole = _in_a_thread(scene)  # no signal can reach it
     # Halfway through the stepping: a cold first run's wall time is mostly compilation, which
     # the run below (from the cache) does not repeat.

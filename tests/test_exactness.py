@@ -126,6 +126,23 @@ def _scenes() -> dict[str, dict]:
     d["hamiltonian"]["formulation"] = "elements"
     scenes["hamilton:projectile:elements"] = d
     scenes["hamilton:H"] = oscillator()
+    # Three bodies of masses 1, 3, 7 in the plane: the canonical equations in exact normal form
+    # (cayley_heyoka.core.symbolic), whose coefficients 1/3, 1/7, 21/10 and exponent -3/2 come
+    # from the text's integers.
+    kinetic = "(varpi1**2 + varpi2**2)/2 + (varpi3**2 + varpi4**2)/6 + (varpi5**2 + varpi6**2)/14"
+    pairs = [(1, 2, 3), (1, 3, 7), (2, 3, 21)]
+    potential = " - ".join(
+        f"{c}/(10*sqrt((eta{2 * i - 1} - eta{2 * j - 1})**2 + (eta{2 * i} - eta{2 * j})**2))"
+        for i, j, c in pairs
+    )
+    scenes["hamilton:H:three_bodies"] = {
+        "hamiltonian": {"H": f"{kinetic} - {potential} + 0.1*sin(t/7)*eta1/3"},
+        "initial": {
+            "eta": ["1", "0", "-1", "0.5", "0", "2"],
+            "varpi": ["0", "1", "0.3", "0", "-0.7", "0"],
+        },
+        "output": {"times": {"start": 0, "stop": 1, "count": 2}, "principal_function": True},
+    }
     scenes["hamilton:H1+H2:elements"] = {
         "hamiltonian": {
             "H1": "(varpi1**2 + eta1**2)/2",

@@ -15,7 +15,7 @@ from users_common import Row, table
 
 HERE = Path(__file__).resolve().parent
 
-TOPICS = ("engine", "orbit", "rotation", "reference", "cli")
+TOPICS = ("engine", "orbit", "rotation", "hamilton", "reference", "cli")
 
 
 def run(quick: bool, figures: Path) -> str:

@@ -31,6 +31,7 @@ show them.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -157,9 +158,20 @@ class _Start:
     ) -> None:
         self.model, self.precision = model, precision
         self.state, self.pars, self.t0 = state, pars, t0
-        self.variables = [v for v, _ in model.system]
-        self.names = set(model.state_names)
-        self.t0_text = _show(t0)
+
+    # Worded or compiled only when needed: a run whose texts are finite at the start (the
+    # compiled check cached) uses none of them.
+    @functools.cached_property
+    def variables(self) -> list[Expr]:
+        return [v for v, _ in self.model.system]
+
+    @functools.cached_property
+    def names(self) -> set[str]:
+        return set(self.model.state_names)
+
+    @functools.cached_property
+    def t0_text(self) -> str:
+        return _show(self.t0)
 
     # ------------------------------------------------------------------ evaluation
     def compile(self, exprs: Sequence[Expr], wide: bool = False) -> Any:

@@ -26,6 +26,11 @@ from .scene import IntegratorOptions
 #: grows like size^1.16 and reaches ~10 s at ~140 kB, while compact mode compiles in 0.2–1.5 s
 #: and its step cost falls from 1.4–2.5× (below 100 kB) to 0.9–1.4× (above 200 kB).
 COMPACT_THRESHOLD = 140_000
+#: The same choice for a model that counts its operations (:attr:`Model.decomposition`), whose
+#: right-hand sides share subexpressions that :meth:`Model.size` counts at every use. The pooled
+#: fits of that benchmark (compile time like size^1.35, and like the decomposition's length
+#: n^1.63, each reaching 10 s at 93 kB and at 344 entries) put 140 kB at ≈ 480 entries.
+COMPACT_DECOMPOSITION = 480
 
 
 def use_compact_mode(model: Model, options: IntegratorOptions) -> bool:
@@ -34,11 +39,16 @@ def use_compact_mode(model: Model, options: IntegratorOptions) -> bool:
     The scene's ``integrator.compact_mode`` decides when given; "auto" chooses compact mode
     for extended precisions (non-compact real128 code took 8–14 s to compile where compact
     took 0.7–0.9 s, at the same step cost; MPFR code is larger still), for models that ask
-    for it (:attr:`Model.compact`), and above :data:`COMPACT_THRESHOLD`.
+    for it (:attr:`Model.compact`), and above :data:`COMPACT_THRESHOLD` (or, for a model
+    that counts its operations, :data:`COMPACT_DECOMPOSITION`).
     """
     if options.compact_mode is not None:
         return options.compact_mode
-    return options.precision.kind != "double" or model.compact or model.size() > COMPACT_THRESHOLD
+    if options.precision.kind != "double" or model.compact:
+        return True
+    if model.decomposition is not None:
+        return model.decomposition > COMPACT_DECOMPOSITION
+    return model.size() > COMPACT_THRESHOLD
 
 
 class Spares:

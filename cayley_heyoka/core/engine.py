@@ -36,7 +36,14 @@ from .errors import IntegrationError, Interrupted, SceneError
 from .event_parity import EventParity
 from .model import Handover, Model, call_handler, own_terminal
 from .precision import Precision
-from .recording import check_fits, evaluate_outputs, event_logs, first_nonfinite, start_values
+from .recording import (
+    all_finite,
+    check_fits,
+    evaluate_outputs,
+    event_logs,
+    first_nonfinite,
+    start_values,
+)
 from .result import Result, versions
 from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals, held_signals
@@ -186,8 +193,7 @@ class Propagation:
             first = evaluate_outputs(
                 self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1]
             )
-            finite = (np.all(np.isfinite(v)) for k, v in first.items() if k not in model.unbounded)
-            if not all(finite):
+            if not all_finite(first, model.unbounded):
                 raise start_failure(model, prec, initial, self._pars, self.grid[0], first)
             check_sources(model, prec, initial, self._pars, self.grid[0])
             started.add((prec.name, str(self.grid[0])))
@@ -283,18 +289,20 @@ class Propagation:
 
     def _can_poison(self) -> bool:
         """Whether a signal can stop heyoka without a per-step callback (:class:`Watch`)."""
-        return (
-            self._callback is None
-            and self.precision.kind == "double"
-            and bool(self.compiled.rhs_pars)
-        )
+        return self._callback is None and self.precision.kind == "double"
 
     def _stop_stepping(self) -> None:
         """Called in the main thread when a signal is noted: with :class:`Watch`, make the
-        next step non-finite, so that heyoka returns after the last whole step."""
+        next step non-finite, so that heyoka returns after the last whole step: by its
+        parameters, or for equations without any (a Hamiltonian of integers) by its state.
+        A step under way when the state is poisoned writes it back, finite: the next one is
+        poisoned by :meth:`_stop_harder`."""
         ta = self._ta
         if self._poisoning and ta is not None:
-            ta.pars[self.compiled.rhs_pars] = np.nan
+            if self.compiled.rhs_pars:
+                ta.pars[self.compiled.rhs_pars] = np.nan
+            else:
+                ta.state[:] = np.nan
 
     def _stop_harder(self) -> bool:
         """Called by :class:`Watch` while heyoka steps: whether the run must be stopped by

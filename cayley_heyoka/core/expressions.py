@@ -17,8 +17,9 @@ import ast
 import io
 import re
 import tokenize
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import heyoka as hy
 
@@ -88,6 +89,54 @@ def parse_expression(
     return expr
 
 
+class Algebra(Protocol):
+    """What a text is built into: heyoka expressions (:func:`parse_expression`), or another
+    representation of the same operations (:func:`rebuild`, e.g. :mod:`.symbolic`)."""
+
+    def leaf(self, expr: hy.expression) -> Any: ...
+    def integer(self, value: int) -> Any: ...
+    def binary(self, symbol: str, a: Any, b: Any) -> Any: ...
+    def neg(self, a: Any) -> Any: ...
+    def call(self, name: str, args: Sequence[Any]) -> Any: ...
+
+
+class _Heyoka:
+    """The grammar's operations on heyoka expressions."""
+
+    def __init__(self, pars: ParTable) -> None:
+        self.pars = pars
+
+    def leaf(self, expr: hy.expression) -> hy.expression:
+        return expr
+
+    def integer(self, value: int) -> hy.expression:
+        # In the run's type: heyoka folds 3/5 in the type of its operands.
+        return self.pars.constant(value)
+
+    def binary(self, symbol: str, a: hy.expression, b: hy.expression) -> hy.expression:
+        return _OPERATORS[symbol](a, b)
+
+    def neg(self, a: hy.expression) -> hy.expression:
+        return -a
+
+    def call(self, name: str, args: Sequence[hy.expression]) -> hy.expression:
+        return FUNCTIONS[name](*args)
+
+
+def rebuild(
+    text: str, symbols: Mapping[str, hy.expression], pars: ParTable, field: str, algebra: Algebra
+) -> Any:
+    """``text``, which :func:`parse_expression` parsed into ``pars`` as ``field``, built again
+    into ``algebra``: its literals are the parameters that parse allocated."""
+    counter = [0]
+
+    def literal(digits: str) -> hy.expression:
+        counter[0] += 1
+        return hy.par[pars.index(f"{field}#{counter[0]}")]
+
+    return _build(text, symbols, pars, field, literal, None, algebra)
+
+
 @dataclass(frozen=True)
 class Node:
     """One operation, name or number of a parsed text (:func:`trace`)."""
@@ -128,7 +177,8 @@ def _build(
     field: str,
     literal: Callable[[str], hy.expression],
     nodes: list[Node] | None,
-) -> hy.expression:
+    algebra: Algebra | None = None,
+) -> Any:
     if not isinstance(text, str) or not text.strip():
         raise SceneError(field, f"must be a non-empty expression string, got {text!r}")
     source = _rename_keywords(text, field)
@@ -136,10 +186,11 @@ def _build(
     table = {_KEYWORD_NAMES.get(k, k): v for k, v in symbols.items()}
     table.setdefault("t", hy.time)
     table.setdefault("pi", hy.pi)
+    ops: Algebra = algebra if algebra is not None else _Heyoka(pars)
     # Nodes (when traced) as positions in ``nodes``, beside their values.
-    Built = tuple[hy.expression, int]
+    Built = tuple[Any, int]
 
-    def node(ast_node: ast.AST, kind: str, value: hy.expression, *operands: Built) -> Built:
+    def node(ast_node: ast.AST, kind: str, value: Any, *operands: Built) -> Built:
         if nodes is None:
             return value, -1
         segment = ast.unparse(ast_node)
@@ -167,36 +218,35 @@ def _build(
             value = build(chain[-1].left)
             for link in reversed(chain):
                 right = build(link.right)
-                result = _apply(link.op, value[0], right[0], field)
+                result = ops.binary(_symbol(link.op, field), value[0], right[0])
                 value = node(link, _SYMBOLS[type(link.op)], result, value, right)
             return value
         if isinstance(n, ast.UnaryOp) and isinstance(n.op, ast.USub | ast.UAdd):
             v = build(n.operand)
-            return node(n, "neg", -v[0], v) if isinstance(n.op, ast.USub) else v
+            return node(n, "neg", ops.neg(v[0]), v) if isinstance(n.op, ast.USub) else v
         if isinstance(n, ast.Name):
             if n.id not in table:
                 known = ", ".join(sorted(k.replace("lambda_", "lambda") for k in table))
                 raise SceneError(field, f"unknown name {n.id!r}; known names: {known}")
-            return node(n, "name", table[n.id])
+            return node(n, "name", ops.leaf(table[n.id]))
         if isinstance(n, ast.Constant) and isinstance(n.value, int | float):
             if isinstance(n.value, bool):
                 raise SceneError(field, "booleans are not numbers here")
             if isinstance(n.value, int) and abs(n.value) < _EXACT_INT_LIMIT:
-                # In the run's type: heyoka folds 3/5 in the type of its operands.
-                return node(n, "number", pars.constant(n.value))
+                return node(n, "number", ops.integer(n.value))
             text_of = ast.get_source_segment(source.strip(), n) or repr(n.value)
             try:
                 exact_fraction(text_of)
             except ValueError as exc:
                 raise SceneError(field, f"literal {exc}") from None
-            return node(n, "number", literal(text_of))
+            return node(n, "number", ops.leaf(literal(text_of)))
         if isinstance(n, ast.Call) and isinstance(n.func, ast.Name):
             fn = FUNCTIONS.get(n.func.id)
             if fn is None or n.keywords:
                 known = ", ".join(sorted(FUNCTIONS))
                 raise SceneError(field, f"unknown function {n.func.id!r}; known: {known}")
             args = [build(a) for a in n.args]
-            return node(n, n.func.id, fn(*[a[0] for a in args]), *args)
+            return node(n, n.func.id, ops.call(n.func.id, [a[0] for a in args]), *args)
         raise SceneError(field, f"unsupported syntax {ast.dump(n)[:60]!r} in {text!r}")
 
     return build(tree)[0]
@@ -222,22 +272,22 @@ def uses_time(text: object) -> bool:
 
 _CHAINED = (ast.Add, ast.Sub, ast.Mult, ast.Div)
 _SYMBOLS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
-_OPERATORS = {
-    ast.Add: lambda a, b: a + b,
-    ast.Sub: lambda a, b: a - b,
-    ast.Mult: lambda a, b: a * b,
-    ast.Div: lambda a, b: a / b,
-    ast.Pow: lambda a, b: a**b,
+_OPERATORS: dict[str, Callable[[Any, Any], Any]] = {
+    "+": lambda a, b: a + b,
+    "-": lambda a, b: a - b,
+    "*": lambda a, b: a * b,
+    "/": lambda a, b: a / b,
+    "**": lambda a, b: a**b,
 }
 
 
-def _apply(op: ast.operator, a: hy.expression, b: hy.expression, field: str) -> hy.expression:
-    if type(op) not in _OPERATORS:
+def _symbol(op: ast.operator, field: str) -> str:
+    if type(op) not in _SYMBOLS:
         hint = " (a power is written **, as in Python)" if isinstance(op, ast.BitXor) else ""
         raise SceneError(
             field, f"operator {type(op).__name__} is not allowed; use + - * / **{hint}"
         )
-    return _OPERATORS[type(op)](a, b)
+    return _SYMBOLS[type(op)]
 
 
 def _parse(source: str, text: str, field: str) -> ast.Expression:

@@ -239,6 +239,11 @@ class Model:
         Compile in compact mode unless the scene says otherwise: the family knows that this
         system's code is large for what it computes (heyoka's non-compact code grows with the
         expression's size, and its compile time faster), where :meth:`size` would not tell.
+    decomposition
+        The length of heyoka's Taylor decomposition of the system as the family counts it
+        (variables, distinct operations, right-hand sides), or None: a measure of the code
+        to compile for right-hand sides that share subexpressions, which :meth:`size` counts
+        at every use (:func:`.compiler.use_compact_mode`).
     unbounded
         Outputs whose infinite value is a value, not a failure (the Cayley–Rodrigues λ, μ, ν
         at a half-turn): a run never stops for them, nor is refused when they start infinite.
@@ -263,6 +268,7 @@ class Model:
     events: list[EventSpec] = field(default_factory=list)
     terminal: list[TerminalSpec] = field(default_factory=list)
     compact: bool = False
+    decomposition: int | None = None
     unbounded: tuple[str, ...] = ()
     variant: str = ""
     variants: Callable[[str], Model] | None = None
@@ -275,7 +281,12 @@ class Model:
     @property
     def state_names(self) -> list[str]:
         """Names of the integrated variables."""
-        return [str(v) for v, _ in self.system]
+        return list(self._state_names)
+
+    @functools.cached_property
+    def _state_names(self) -> tuple[str, ...]:
+        # Printed once per model (~1 µs a variable, read several times by each run).
+        return tuple(str(v) for v, _ in self.system)
 
     def structure_key(self) -> str:
         """Text that identifies the compiled code: equations and events, not the numbers."""
@@ -356,7 +367,7 @@ class Model:
             events=list(self.events),
             terminal=list(self.terminal),
         )
-        for key in ("code_key", "_held"):  # the structure's, computed at most once
+        for key in ("code_key", "_held", "_state_names"):  # the structure's, computed once
             if key in self.__dict__:
                 model.__dict__[key] = self.__dict__[key]
         return model

@@ -260,6 +260,8 @@ class Precision:
         """A 1-d numpy array of ``values`` in the target type."""
         values = list(values)
         if self.kind == "double":
+            if all(type(v) is float for v in values):  # already doubles: nothing to convert
+                return np.array(values, dtype=float)
             return np.array([self.number(v) for v in values], dtype=float)
         # The dtype is explicit: an empty list would otherwise become float64, which heyoka's
         # compiled functions refuse for real128 and real.

@@ -239,10 +239,12 @@ class Watch:
     run goes on regardless, the state: see :meth:`run`): the step under way becomes
     non-finite, and heyoka returns the outputs of the whole steps before it (``err_nf_state``;
     the rows it returns are the uninterrupted run's). The engine restores
-    the parameters and reports the interruption. No callback runs after each step, so an
-    uninterrupted run costs what a run in any other thread does (measured:
-    ``python validation/interrupt_cost.py``). Double precision with runtime parameters only;
-    other runs keep the per-step callback.
+    the parameters and reports the interruption. Equations without runtime parameters have
+    their state set to NaN instead (a step under way writes it back finite, and is followed
+    by the repoisoning of ``again``). No callback runs after each step, so an uninterrupted run
+    costs what a run in any other thread does (measured: ``python
+    validation/interrupt_cost.py``). Double precision only; other runs keep the per-step
+    callback.
     """
 
     def __init__(self) -> None:

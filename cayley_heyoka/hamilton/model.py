@@ -21,7 +21,7 @@ from ..core.expressions import parse_expression
 from ..core.model import Model, ParTable
 from ..core.precision import exact_fraction
 from ..core.scene import Scene
-from .canonical import canonical_equations, principal_rate
+from .canonical import canonical_equations, principal_rate, shared_canonical_equations
 from .elements import check_flow, compose, element_equations
 from .numbers import numbers, same_numbers
 from .outputs import select_monitors, user_events, wants_principal_function
@@ -44,8 +44,9 @@ def build_model(scene: Scene) -> Model:
     pars = ParTable(prec)
     H1, H2 = _split(ham, eta, varpi, pars, given.values)
     H = H1 if H2 is None else H1 + H2
+    decomposition = None
     if ham.formulation == "canonical":
-        system = canonical_equations(H, eta, varpi)
+        system, decomposition = _canonical(ham, H, eta, varpi, pars)
         outputs = {str(v): v for v in (*eta, *varpi)}
         energy, state_varpi = H, varpi
         rate_of_S = None
@@ -79,6 +80,7 @@ def build_model(scene: Scene) -> Model:
         conserved,
         events,
         initial_fields=fields,
+        decomposition=decomposition,
     )
 
 
@@ -92,6 +94,20 @@ def _split(ham: Hamiltonian, eta, varpi, pars: ParTable, values: Mapping) -> tup
     H1 = parse_expression(ham.split[0], symbols, pars, "hamiltonian.H1")
     H2 = parse_expression(ham.split[1], symbols, pars, "hamiltonian.H2")
     return H1, H2
+
+
+def _canonical(ham: Hamiltonian, H, eta, varpi, pars: ParTable) -> tuple[list, int | None]:
+    """(A.) of the scene's H: from its texts with the shared subexpressions of
+    :func:`.canonical.shared_canonical_equations`, the projectile's by heyoka; and the
+    decomposition's length where it is counted."""
+    if ham.model == "projectile":
+        return canonical_equations(H, eta, varpi), None
+    if ham.text is not None:
+        texts = [(ham.text, "hamiltonian.H")]
+    else:
+        texts = list(zip(ham.split or (), ("hamiltonian.H1", "hamiltonian.H2"), strict=True))
+    symbols = {str(v): v for v in (*eta, *varpi)}
+    return shared_canonical_equations(H, texts, symbols, pars, eta, varpi)
 
 
 def _projectile(eta, varpi, pars: ParTable, values: Mapping) -> tuple[Any, Any]:

@@ -109,14 +109,15 @@ def test_a_member_the_table_would_pass_but_its_scene_refuses_refuses_the_study(h
     would refuse: moments that violate the triangle inequality, or sit on its edge in decimals,
     are validated alone, and the study is refused naming the member."""
     scene = {**BODY, "output": {"times": {"start": 0.0, "stop": 2.0, "count": 3}}}
+    C = "body.inertia[2]"
     moments = [2.5, 2.25, "2.5000000000000000001", 0.5, 2.6]  # 2.6 > 1 + 1.5
     out = tmp_path / "s.h5"
     hostile.run(["sweep", _study(hostile, scene, {"body.inertia[2]": moments}), "--out", str(out)],
-                expect="refused", field="member 2 (body.inertia[2] = 2.5): body.inertia")  # fmt: skip
+                expect="refused", field=f"member 2 ({C} = 2.5): body.inertia")  # fmt: skip
     assert not out.exists()
     doubles = [2.5, 2.25, 0.5, 2.6]
     hostile.run(["sweep", _study(hostile, scene, {"body.inertia[2]": doubles}), "--out", str(out)],
-                expect="refused", field="member 3 (body.inertia[2] = 2.6): body.inertia")  # fmt: skip
+                expect="refused", field=f"member 3 ({C} = 2.6): body.inertia")  # fmt: skip
     assert not out.exists()
     edge = [2.5, 2.25, "2.4999999999999999999", 0.5]
     hostile.run(["sweep", _study(hostile, scene, {"body.inertia[2]": edge}), "--out", str(out)],
