@@ -127,6 +127,12 @@ def quaternion_axes(q: Sequence[Expr], rho: Expr) -> OrbitAxes:
     return OrbitAxes(radial, transverse, [R[0][2], R[1][2], R[2][2]])
 
 
+def pull(r: Expr, mu: Expr) -> Expr:
+    """μ/r², as :func:`in_plane_rates` writes it: the zonal terms take their powers of r from
+    it (:meth:`.disturbing.Zonal.gradient`), so that heyoka computes it once."""
+    return mu / (r * r)
+
+
 def in_plane_rates(
     r: Expr, rdot: Expr, h: Expr, mu: Expr, Omega_r: Expr | None, Omega_rho: Expr | None
 ) -> list[Expr]:
@@ -136,7 +142,7 @@ def in_plane_rates(
     # taken once: over 10⁸ steps of Kepler those made the energy walk 3× farther, with a
     # windows slope of 0.63–0.68 (validation/bench_conservation.py), where this form walks
     # by Brouwer's law.
-    radial = h * h / (r2 * r) - mu / r2
+    radial = h * h / (r2 * r) - pull(r, mu)
     if Omega_r is not None:
         radial = radial + Omega_r
     return [rdot, radial, h / r2, Omega_rho if Omega_rho is not None else _ZERO]
@@ -156,12 +162,7 @@ def plane_rates(
     with the reference plane."""
     sP, cP = hy.sin(Phi), hy.cos(Phi)
     dTheta, dSigma, dPhi = [], [], []
-    if Omega_beta is not None:
-        turn = Omega_beta / h  # the orbit frame's angular velocity about x̂₃, shared
-        lift = hy.sin(u) * turn / sP
-        dTheta.append(lift)
-        dSigma.append(cP * lift)
-        dPhi.append(hy.cos(u) * turn)
+    A = B = C = None
     if plane is not None:
         A, B, C = plane.rates_on_node(Theta)
         if tilt is not None and any(w is not None for w in (A, B, C)):
@@ -172,13 +173,24 @@ def plane_rates(
             wy, wz = c * w[1] + s * w[2], c * w[2] - s * w[1]
             cT, sT = hy.cos(Theta), hy.sin(Theta)
             A, B, C = w[0] * cT + wy * sT, wy * cT - w[0] * sT, wz
-        if B is not None:
-            dTheta.append(-cP * B / sP)
-            dSigma.append(-B / sP)
-        if A is not None:
-            dPhi.append(-A)
-        if C is not None:
-            dTheta.append(-C)
+    # One quotient each (heyoka writes a product by 1/sin Φ as a quotient, so a reciprocal
+    # would not be shared): Ω_β/(h sin Φ), the orbit frame's angular velocity about x̂₃ over
+    # sin Φ, and B/sin Φ.
+    if Omega_beta is not None:
+        lift = Omega_beta / (h * sP)
+        dTheta.append(hy.sin(u) * lift)
+        dSigma.append(cP * dTheta[0])
+        # cos u Ω_β/h as sin Φ cos u times it: a product ∂Ω/∂ρ = r ŷ₃·∇Ω already holds
+        # (ŷ₃'s third entry on frame 1), instead of a quotient by h of its own.
+        dPhi.append(sP * hy.cos(u) * lift)
+    if B is not None:
+        over = B / sP
+        dTheta.append(-cP * over)
+        dSigma.append(-over)
+    if A is not None:
+        dPhi.append(-A)
+    if C is not None:
+        dTheta.append(-C)
     return [_total(terms) for terms in (dTheta, dSigma, dPhi)]
 
 
