@@ -98,3 +98,19 @@ def table(rows: list[Row]) -> str:
             f"{met} | {r.note} |"
         )
     return "\n".join(lines)
+
+
+def main(
+    rows: Callable[[bool], list[Row]], description: str, quick: str, argv: list[str] | None
+) -> int:
+    """A users script's command line: ``--quick`` (what ``quick`` says it is), then its table."""
+    import argparse
+
+    import heyoka as hy
+
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--quick", action="store_true", help=quick)
+    args = parser.parse_args(argv)
+    print(f"heyoka {hy.__version__}")
+    print(table(rows(args.quick)))
+    return 0

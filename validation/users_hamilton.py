@@ -29,7 +29,6 @@ difference of the final positions and velocities of the two.
 
 from __future__ import annotations
 
-import argparse
 import copy
 import sys
 from decimal import Decimal
@@ -37,7 +36,8 @@ from typing import Any
 
 import heyoka as hy
 import numpy as np
-from users_common import Row, interleaved, table
+import users_common
+from users_common import Row, interleaved
 
 import cayley_heyoka as ch
 from cayley_heyoka.core import span_probe
@@ -211,12 +211,7 @@ def rows(quick: bool) -> list[Row]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="a smoke run (seconds)")
-    args = parser.parse_args(argv)
-    print(f"heyoka {hy.__version__}")
-    print(table(rows(args.quick)))
-    return 0
+    return users_common.main(rows, __doc__.splitlines()[0], "a smoke run (seconds)", argv)
 
 
 if __name__ == "__main__":

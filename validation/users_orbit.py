@@ -27,7 +27,6 @@ Rows (each ours ÷ its floor, timed interleaved in one process, median and sprea
 
 from __future__ import annotations
 
-import argparse
 import copy
 import statistics
 import sys
@@ -38,8 +37,9 @@ import bench_ias15
 import engine_figures
 import heyoka as hy
 import numpy as np
+import users_common
 from bench_common import available
-from users_common import Row, interleaved, table
+from users_common import Row, interleaved
 
 import cayley_heyoka as ch
 from cayley_heyoka.core.compiler import compile_model
@@ -254,12 +254,7 @@ def rows(quick: bool) -> list[Row]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="a smoke run (< 30 s)")
-    args = parser.parse_args(argv)
-    print(f"heyoka {hy.__version__}")
-    print(table(rows(args.quick)))
-    return 0
+    return users_common.main(rows, __doc__.splitlines()[0], "a smoke run (< 30 s)", argv)
 
 
 if __name__ == "__main__":
