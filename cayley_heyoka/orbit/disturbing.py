@@ -67,11 +67,10 @@ class Context:
     values: Mapping[str, Any] | None = None
 
     def values_for(self, term: Any) -> Mapping[str, Any]:
-        """The values of ``term``'s parameters (without the model's numbers, those of every
-        formulation)."""
+        """The values of ``term``'s parameters."""
         if self.values is not None:
             return self.values
-        return term.values(self.mu_value, self.dps, at_radius=True)
+        return term.values(self.mu_value, self.dps)
 
     def par(self, name: str, values: Mapping[str, Any]) -> Expr:
         """The parameter ``name``, allocated on first use with its value from ``values``."""
@@ -161,10 +160,9 @@ class Zonal:
         values = ctx.values_for(self)
         return [ctx.par(f"zonal.axis_unit[{i}]", values) for i in range(3)]
 
-    def values(self, mu: Number, dps: int, at_radius: bool = False) -> dict[str, str]:
+    def values(self, mu: Number, dps: int) -> dict[str, str]:
         """The parameters' values, in mpmath with ``dps`` digits: k̂ normalised (an oblique
-        axis only) and ``zonal.Cn`` = −μ Jₙ Rⁿ / n!; ``at_radius`` (a formulation that takes
-        ∇Ω at r x̂, :meth:`gradient`), also ``zonal.Dn`` = Cₙ / μᵐ, m = ⌈(n + 2)/2⌉."""
+        axis only) and ``zonal.Cn`` = −μ Jₙ Rⁿ / n!."""
         out = {}
         with mpmath.workdps(dps):
             if self.coordinate_axis() is None:
@@ -173,10 +171,7 @@ class Zonal:
                     out[f"zonal.axis_unit[{i}]"] = _text(k[i] / mpmath.norm(k), dps)
             m, R = _exact(mu), _exact(self.radius)
             for n, J in self.coefficients:
-                C = -m * _exact(J) * R**n / mpmath.factorial(n)
-                out[f"zonal.C{n}"] = _text(C, dps)
-                if at_radius:
-                    out[f"zonal.D{n}"] = _text(C / m ** _pull_power(n), dps)
+                out[f"zonal.C{n}"] = _text(-m * _exact(J) * R**n / mpmath.factorial(n), dps)
         return out
 
     def omega(self, x: Sequence[Expr], ctx: Context) -> Expr:
@@ -196,7 +191,6 @@ class Zonal:
         r2: Expr | None,
         ctx: Context,
         radius: Expr | None = None,
-        pull: Expr | None = None,
     ) -> Gradient:
         """∇Ω in closed form, with one power of r per term (after :meth:`omega`, whose
         parameters it uses).
@@ -215,16 +209,12 @@ class Zonal:
         ``x`` is the position and ``r2 = |x|²``; or, with ``radius`` r given, ``x`` is the
         unit vector x̂ (r2 unused) and the same sums are written in w = k̂·x̂ with r = 1,
         times ``Cₙ r⁻ⁿ⁻²``; then the part along x̂ is given as ∂Ω/∂r = −(n + 1) Ωₙ/r
-        (``radial``, :class:`Gradient`), which needs no Wₙ. With ``pull`` = μ/r², the Kepler
-        term's own expression, ``Cₙ r⁻ⁿ⁻²`` is ``Dₙ (μ/r²)ᵐ`` (times r for n odd; m = ⌈(n +
-        2)/2⌉, ``Dₙ = Cₙ/μᵐ`` a parameter): products of a quotient the equations compute
-        anyway, where a power of r costs about two products in Taylor form. For n = 2 the
-        product ``Cₙ r⁻⁴ s`` serves both parts, ``Cₙ r⁻⁴ T₂ = (Cₙ r⁻⁴ s) s − Cₙ r⁻⁴``.
+        (``radial``, :class:`Gradient`), which needs no Wₙ. For n = 2 the product
+        ``Cₙ r⁻⁴ s`` serves both parts, ``Cₙ r⁻⁴ T₂ = (Cₙ r⁻⁴ s) s − Cₙ r⁻⁴``.
         """
         s = self._axial(x, ctx)
         C = {n: hy.par[ctx.pars.index(f"zonal.C{n}")] for n, _ in self.coefficients}
         central, along, radial = [], [], []
-        pulls: list[Expr] = []  # (μ/r²)ᵐ for m = 1, 2, …, shared by the degrees
         t_prev, t, u = None, s, None  # T₀ = 1, T₁ = s, U₁ = 1 (None: the number 1)
         for k in range(1, max(C) + 1):
             if k in C:
@@ -234,12 +224,12 @@ class Zonal:
                     along.append(C[k] * u * r2 ** (-(k + 0.5)))
                     central.append(C[k] * w * r2 ** (-(k + 1.5)))
                 elif k == 2:
-                    scale = self._inverse_power(ctx, k, radius, pull, pulls)
+                    scale = C[k] * radius ** (-(k + 2))
                     shared = scale * s
                     along.append(6 * shared)
                     radial.append(-3 * (3 * (shared * s) - scale))
                 else:
-                    scale = self._inverse_power(ctx, k, radius, pull, pulls)
+                    scale = C[k] * radius ** (-(k + 2))
                     along.append(scale * u)
                     radial.append(scale * (-(k + 1) * t))
             # Tₖ₊₁ = (2k + 1) s Tₖ − k² r² Tₖ₋₁ and Uₖ₊₁, written so that s·s and r² are
@@ -259,25 +249,6 @@ class Zonal:
             g = _sum(along) if sign else -_sum(along)
             vector = [[g] if i == axis else [] for i in range(3)]
         return Gradient(central, vector, radial if radius is not None else None)
-
-    def _inverse_power(
-        self, ctx: Context, n: int, radius: Expr, pull: Expr | None, pulls: list[Expr]
-    ) -> Expr:
-        """``Cₙ r⁻ⁿ⁻²``: ``Dₙ (μ/r²)ᵐ`` (times r for n odd) with ``pull`` = μ/r², the powers
-        of ``pull`` kept in ``pulls`` for the next degree; without it ``Cₙ`` times a power of
-        r."""
-        if pull is None:
-            return hy.par[ctx.pars.index(f"zonal.C{n}")] * radius ** (-(n + 2))
-        m = _pull_power(n)
-        while len(pulls) < m:
-            pulls.append(pull if not pulls else pulls[-1] * pull)
-        scale = ctx.par(f"zonal.D{n}", ctx.values_for(self)) * pulls[m - 1]
-        return scale * radius if n % 2 else scale
-
-
-def _pull_power(n: int) -> int:
-    """m with ``r⁻ⁿ⁻² = (1/r²)ᵐ`` (n even) or ``(1/r²)ᵐ r`` (n odd)."""
-    return (n + 3) // 2
 
 
 @dataclass(frozen=True)
@@ -383,11 +354,10 @@ class ThirdBody:
             _exact(self.mean_longitude0) - _exact(self.node) - _exact(self.argument_of_pericentre)
         )
 
-    def values(self, mu: Number, dps: int, at_radius: bool = False) -> dict[str, Any]:
+    def values(self, mu: Number, dps: int) -> dict[str, Any]:
         """The parameters' values, in mpmath with ``dps`` digits: every product of scene
         numbers :meth:`position` and :meth:`omega` use, and the orbit normal a circular
-        perturber's Jacobi monitor uses (:meth:`normal`); the same for every formulation
-        (``at_radius`` as :meth:`Zonal.values`)."""
+        perturber's Jacobi monitor uses (:meth:`normal`)."""
         out: dict[str, Any] = {"third_body.n": self.n}
         with mpmath.workdps(dps):
             P, Q = self.axes()
@@ -477,7 +447,7 @@ class UserPotential:
         text = expression_text(table["Omega"], f"{where}.Omega")
         return cls(text, uses_time(text))
 
-    def values(self, mu: Number, dps: int, at_radius: bool = False) -> dict[str, Any]:
+    def values(self, mu: Number, dps: int) -> dict[str, Any]:
         """None of its own: the literals of its text are the structure's (``FIELD#k``)."""
         return {}
 
@@ -558,12 +528,10 @@ def force(
     r2: Expr | None,
     ctx: Context,
     radius: Expr | None = None,
-    pull: Expr | None = None,
 ) -> Gradient:
     """∇Ω at the position ``x`` (with ``r2 = |x|²`` as the formulation writes it), or, with
     ``radius`` r given, at ``r x`` for the unit vector ``x``, with ∂Ω/∂r in ``radial``
-    (:meth:`Zonal.gradient`, which takes its powers of r from ``pull``, the formulation's
-    μ/r², where given).
+    (:meth:`Zonal.gradient`).
 
     ``omegas`` are the terms' Ω on the Cartesian placeholders ``X`` (built once, for the
     monitors): a term without a closed-form gradient is differentiated by heyoka and composed
@@ -574,7 +542,7 @@ def force(
     subs = None if position == list(X) else {str(a): b for a, b in zip(X, position, strict=True)}
     for term, omega in zip(terms, omegas, strict=True):
         if hasattr(term, "gradient"):
-            g = term.gradient(x, r2, ctx, radius, pull)
+            g = term.gradient(x, r2, ctx, radius)
         else:
             parts = gradient(omega, X)
             if subs is not None:

@@ -127,12 +127,6 @@ def quaternion_axes(q: Sequence[Expr], rho: Expr) -> OrbitAxes:
     return OrbitAxes(radial, transverse, [R[0][2], R[1][2], R[2][2]])
 
 
-def pull(r: Expr, mu: Expr) -> Expr:
-    """μ/r², as :func:`in_plane_rates` writes it: the zonal terms take their powers of r from
-    it (:meth:`.disturbing.Zonal.gradient`), so that heyoka computes it once."""
-    return mu / (r * r)
-
-
 def in_plane_rates(
     r: Expr, rdot: Expr, h: Expr, mu: Expr, Omega_r: Expr | None, Omega_rho: Expr | None
 ) -> list[Expr]:
@@ -142,7 +136,7 @@ def in_plane_rates(
     # taken once: over 10⁸ steps of Kepler those made the energy walk 3× farther, with a
     # windows slope of 0.63–0.68 (validation/bench_conservation.py), where this form walks
     # by Brouwer's law.
-    radial = h * h / (r2 * r) - pull(r, mu)
+    radial = h * h / (r2 * r) - mu / r2
     if Omega_r is not None:
         radial = radial + Omega_r
     return [rdot, radial, h / r2, Omega_rho if Omega_rho is not None else _ZERO]

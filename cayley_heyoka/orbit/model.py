@@ -253,14 +253,11 @@ class _Builder:
         return self.pars.add(name, self.values[name])
 
     def force(self, x: list[Any], r2: Any, radius: Any = None) -> Gradient | None:
-        """∇Ω at the position x, |x|² = r2, or at r x̂ for ``x`` = x̂ and ``radius`` = r, with
-        the Kepler term's μ/r² (:func:`.disturbing.force`); None without a disturbing
-        function."""
+        """∇Ω at the position x, |x|² = r2, or at r x̂ for ``x`` = x̂ and ``radius`` = r
+        (:func:`.disturbing.force`); None without a disturbing function."""
         if not self.perturbed:
             return None
-        pull = None if radius is None else eq.pull(radius, self.mu)
-        terms = self.orbit.perturbations
-        return force(terms, self.omegas, self.X, x, r2, self.ctx, radius, pull)
+        return force(self.orbit.perturbations, self.omegas, self.X, x, r2, self.ctx, radius)
 
     def at_position(self, expr: Any) -> Any:
         """An expression of the Cartesian placeholders, composed with the position."""

@@ -43,8 +43,6 @@ from .tilt import FRAME, LEVEL, TILTED, angles_in
 GUARD_DIGITS = 15
 #: Formulations whose ρ sheds its whole revolutions (:mod:`.revolutions`).
 _TURNING = ("cayley", "quaternion")
-#: Formulations that take ∇Ω at r x̂ with the Kepler term's μ/r² (:meth:`.Zonal.gradient`).
-_AT_RADIUS = ("cayley", "quaternion")
 
 
 def structure(scene: Scene) -> str:
@@ -169,7 +167,7 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
     values: dict[str, Any] = {"mu": orbit.mu}
     values |= plane_numbers(orbit.plane)
     for term in orbit.perturbations:
-        values |= term.values(orbit.mu, dps, at_radius=orbit.formulation in _AT_RADIUS)
+        values |= term.values(orbit.mu, dps)
     t0 = start_time(scene)
     if orbit.formulation == "encke":
         with mpmath.workdps(dps):
