@@ -120,19 +120,38 @@ def model_of(scene: Scene) -> Model:
     Running one scene again (a benchmark, a notebook cell) then costs no build. (Each run
     takes its own copies of terminal-event handlers that keep state: :func:`own_terminal`.)
     """
+    return _held(scene).model
+
+
+class _Held:
+    """What a run of a scene needs that does not change from run to run: its model, and
+    whether the refusals that depend on the scene alone were checked (they passed)."""
+
+    __slots__ = ("model", "ref", "checked")
+
+    def __init__(self, scene: Scene, model: Model) -> None:
+        self.ref = weakref.ref(scene)
+        self.model = model
+        self.checked = False
+
+
+def _held(scene: Scene) -> _Held:
     key = id(scene)
     held = _MODELS.get(key)
-    if held is not None and held[0]() is scene:
-        return held[1]
-    model = model_for(scene)
+    if held is not None and held.ref() is scene:
+        return held
+    # Overflows while building are not reported by numpy: the run's checks name them.
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        held = _Held(scene, model_for(scene))
     if len(_MODELS) >= _MODELS_HELD:
         _MODELS.pop(next(iter(_MODELS)))
-    _MODELS[key] = (weakref.ref(scene), model)
-    return model
+    _MODELS[key] = held
+    return held
 
 
 #: Models of the scenes run last (by object: a scene is immutable once validated).
-_MODELS: dict[int, tuple[weakref.ref, Model]] = {}
+_MODELS: dict[int, _Held] = {}
 _MODELS_HELD = 64
 
 
@@ -172,31 +191,28 @@ class Propagation:
         self._wall0 = time.perf_counter()
         self.scene = scene
         self.precision = prec = scene.integrator.precision
-        # Overflows while building are not reported by numpy: the checks below name them.
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            self.model = model = model_of(scene)
-            # The whole parameter vector (outputs may use parameters the equations do not);
-            # the integrator holds its leading part, copied back whenever a handler changes it.
-            initial, self._pars = start_values(model, prec)
-        check_fits(scene, model)
-        check_units(scene, [*model.outputs, *model.monitors])
+        held = _held(scene)
+        self.model = model = held.model
+        # The whole parameter vector (outputs may use parameters the equations do not);
+        # the integrator holds its leading part, copied back whenever a handler changes it.
+        initial, self._pars = start_values(model, prec)
+        if not held.checked:
+            check_fits(scene, model)
+            check_units(scene, [*model.outputs, *model.monitors])
         self.grid = scene.time_grid
         self.compiled, self._cached = compile_model(model, scene.integrator)
         self._compile_seconds = 0.0 if self._cached else self.compiled.compile_seconds
         self._first = model
         # A variant a terminal handler asked for (:class:`Handover`), taken over after the call.
         self._handover: Handover | None = None
-        # A model's numbers do not change: its start at a time is checked once.
-        started = model.__dict__.setdefault("_started", set())
-        if (prec.name, str(self.grid[0])) not in started:
+        if not held.checked:
             first = evaluate_outputs(
                 self.compiled, model, initial[None, :], self._pars[None, :], self.grid[:1]
             )
             if not all_finite(first, model.unbounded):
                 raise start_failure(model, prec, initial, self._pars, self.grid[0], first)
             check_sources(model, prec, initial, self._pars, self.grid[0])
-            started.add((prec.name, str(self.grid[0])))
+            held.checked = True  # a scene's numbers do not change: checked once
         self._initial = initial
         self._ta = ta = self._fresh_integrator()
         self._held = len(ta.pars)

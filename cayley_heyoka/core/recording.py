@@ -4,6 +4,7 @@ precision, event logs, and the checks that a run's records fit in memory and sta
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Container, Mapping, Sequence
 from typing import Any
 
@@ -63,7 +64,10 @@ def start_values(model: Model, precision: Precision) -> tuple[np.ndarray, np.nda
     """
     held = model.__dict__.setdefault("_start_values", {})
     if precision.name not in held:
-        held[precision.name] = _start_values(model, precision)
+        # Overflows in the conversion are not reported by numpy: the refusals name them.
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            held[precision.name] = _start_values(model, precision)
     state, values = held[precision.name]
     return state.copy(), values.copy()
 

@@ -29,6 +29,7 @@ import contextvars
 import difflib
 import functools
 import math
+import pickle
 import tomllib
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -585,6 +586,7 @@ class Scene:
         # shipped with it: 10⁷ output times are 80 MB in double.
         state = dict(self.__dict__)
         state.pop("time_grid", None)
+        state.pop("_source_bytes", None)
         return state
 
     def __repr__(self) -> str:
@@ -603,8 +605,14 @@ class Scene:
         return cls.from_dict(parse_toml(text))
 
     def to_dict(self) -> dict[str, Any]:
-        """The plain dictionary this scene was built from."""
-        return plain_copy(self.source)
+        """The plain dictionary this scene was built from (a new copy each call)."""
+        return pickle.loads(self._source_bytes)
+
+    @functools.cached_property
+    def _source_bytes(self) -> bytes:
+        # Every result carries its scene: unpickling the plain source is ~3× faster than
+        # copying it node by node.
+        return pickle.dumps(self.source, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def require_scene(scene: Any, name: str = "scene") -> Scene:
