@@ -48,6 +48,7 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..core.outcomes import Ended
 from ..core.precision import Precision
 from ..core.vectors import cross, dot
 from . import attitude as att
@@ -174,13 +175,12 @@ class _FreeFlow:
 
     def next_passage(self, limit: Any) -> tuple[Any | None, int]:
         """Propagate towards ``limit``; the time of the passage reached, or None, and steps."""
-        res = self.ta.propagate_until(limit)
-        outcome, steps = res[0], int(res[3])
-        if outcome == hy.taylor_outcome.time_limit:
-            return None, steps
-        if int(outcome) == -1:
-            return self.ta.time, steps
-        raise RuntimeError(f"free motion: integration stopped with outcome {outcome}")
+        ended = Ended.of(self.ta.propagate_until(limit))
+        if ended.outcome == hy.taylor_outcome.time_limit:
+            return None, ended.steps
+        if int(ended.outcome) == -1:
+            return self.ta.time, ended.steps
+        raise RuntimeError(f"free motion: integration stopped with outcome {ended.outcome}")
 
     def snapshot(self) -> tuple[Any, np.ndarray]:
         return self.ta.time, np.array(self.ta.state, copy=True)
