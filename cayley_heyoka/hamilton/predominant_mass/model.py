@@ -52,12 +52,8 @@ def build_model(scene: Scene) -> Model:
         given.values,
     )
     outputs: dict[str, Any] = {}
-    if ham.formulation == "canonical":
-        xi = [list(hy.make_vars(*(f"{a}{i + 1}" for a in _AXES))) for i in range(n)]
-        p = [list(hy.make_vars(*(f"p{a}{i + 1}" for a in _AXES))) for i in range(n)]
-        system = pe.canonical_system(xi, p, c)
-        xprime = [[q * c.inverse_mass(i) for q in p[i]] for i in range(n)]
-    else:
+    form = ham.form
+    if form.elements:
         z = [list(hy.make_vars(*(f"{e}{i + 1}" for e in pe.ELEMENTS))) for i in range(n)]
         system = pe.element_system(z, c)
         states = [pe.state_from_elements(zi, i, c) for i, zi in enumerate(z)]
@@ -65,6 +61,11 @@ def build_model(scene: Scene) -> Model:
         xprime = [s[1] for s in states]
         p = [[c.mass(i) * v for v in xprime[i]] for i in range(n)]
         outputs |= {str(v): v for zi in z for v in zi}
+    else:
+        xi = [list(hy.make_vars(*(f"{a}{i + 1}" for a in _AXES))) for i in range(n)]
+        p = [list(hy.make_vars(*(f"p{a}{i + 1}" for a in _AXES))) for i in range(n)]
+        system = pe.canonical_system(xi, p, c)
+        xprime = [[q * c.inverse_mass(i) for q in p[i]] for i in range(n)]
     for i in range(n):
         outputs |= {f"{a}{i + 1}": x for a, x in zip(_AXES, xi[i], strict=True)}
         outputs |= {f"v{a}{i + 1}": v for a, v in zip(_AXES, xprime[i], strict=True)}
@@ -75,7 +76,7 @@ def build_model(scene: Scene) -> Model:
         S = hy.make_vars("S")
         system.append((S, 2.0 * pe.kinetic_energy(p, c) - H))
         outputs["S"] = S
-    if ham.formulation == "elements":
+    if form.elements:
         system, outputs, monitors = _offsets(system, outputs, monitors, 6 * n, pars, given.values)
     monitors, conserved = select_monitors(scene, monitors, ("energy", "angular_momentum"))
     events = user_events(scene, outputs, pars)
@@ -89,7 +90,7 @@ def build_model(scene: Scene) -> Model:
         monitors,
         conserved,
         events,
-        compact=ham.formulation == "elements" or n >= _COMPACT_BODIES,
+        compact=form.compact or n >= _COMPACT_BODIES,
     )
     _provenance(model)
     return model
