@@ -31,6 +31,9 @@ class Formulation:
         The value of ``orbit.formulation``.
     state
         The state's variables, in order.
+    build
+        ``(builder, variant)``: the formulation's system, outputs and terminal events on a
+        :class:`.model.Builder` (``variant``: of :mod:`.tilt`, None without variants).
     cartesian
         The state is the position and velocity in the fixed frame (each variable starts at
         its own component of ``orbit.position``, ``orbit.velocity``).
@@ -51,13 +54,11 @@ class Formulation:
     twin
         The default twin of :func:`.cartesian_check.check_twin`: a formulation, or
         ``"precision"`` (the same scene at the next precision).
-    build
-        ``(builder, variant)``: the formulation's system, outputs and terminal events on a
-        :class:`.model.Builder` (``variant``: of :mod:`.tilt`, None without variants).
     """
 
     name: str
     state: tuple[str, ...]
+    build: Callable[..., Any]
     cartesian: bool = False
     deviation: bool = False
     hyperbolic: bool = True
@@ -65,7 +66,6 @@ class Formulation:
     revolutions: bool = False
     angles: bool = False
     twin: str = "cartesian"
-    build: Callable[..., Any] | None = None
 
     def __reduce__(self) -> tuple[Any, tuple[str]]:
         # By name: the model's part is a closure, and one object per formulation is the rule.
@@ -75,31 +75,31 @@ class Formulation:
 CAYLEY = Formulation(
     "cayley",
     ("r", "rdot", "rho", "h", "Theta", "Sigma", "Phi"),
+    later(_MODEL, "Builder.cayley"),
     gauge=True,
     revolutions=True,
     angles=True,
-    build=later(_MODEL, "Builder.cayley"),
 )
 QUATERNION = Formulation(
     "quaternion",
     ("r", "rdot", "rho", "h", "qw", "qx", "qy", "qz"),
+    later(_MODEL, "Builder.quaternion"),
     gauge=True,
     revolutions=True,
-    build=later(_MODEL, "Builder.quaternion"),
 )
 CARTESIAN = Formulation(
     "cartesian",
     ("x", "y", "z", "vx", "vy", "vz"),
+    later(_MODEL, "Builder.cartesian"),
     cartesian=True,
     twin="precision",
-    build=later(_MODEL, "Builder.cartesian"),
 )
 ENCKE = Formulation(
     "encke",
     ("dx", "dy", "dz", "dvx", "dvy", "dvz", "psi"),
+    later(_MODEL, "Builder.encke"),
     deviation=True,
     hyperbolic=False,
-    build=later(_MODEL, "Builder.encke"),
 )
 
 #: Every formulation, by name (in the order the scene's error lists them).

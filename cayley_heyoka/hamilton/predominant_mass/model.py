@@ -53,7 +53,12 @@ def build_model(scene: Scene) -> Model:
     )
     outputs: dict[str, Any] = {}
     form = ham.form
-    if form.elements:
+    if not form.elements:
+        xi = [list(hy.make_vars(*(f"{a}{i + 1}" for a in _AXES))) for i in range(n)]
+        p = [list(hy.make_vars(*(f"p{a}{i + 1}" for a in _AXES))) for i in range(n)]
+        system = pe.canonical_system(xi, p, c)
+        xprime = [[q * c.inverse_mass(i) for q in p[i]] for i in range(n)]
+    else:
         z = [list(hy.make_vars(*(f"{e}{i + 1}" for e in pe.ELEMENTS))) for i in range(n)]
         system = pe.element_system(z, c)
         states = [pe.state_from_elements(zi, i, c) for i, zi in enumerate(z)]
@@ -61,11 +66,6 @@ def build_model(scene: Scene) -> Model:
         xprime = [s[1] for s in states]
         p = [[c.mass(i) * v for v in xprime[i]] for i in range(n)]
         outputs |= {str(v): v for zi in z for v in zi}
-    else:
-        xi = [list(hy.make_vars(*(f"{a}{i + 1}" for a in _AXES))) for i in range(n)]
-        p = [list(hy.make_vars(*(f"p{a}{i + 1}" for a in _AXES))) for i in range(n)]
-        system = pe.canonical_system(xi, p, c)
-        xprime = [[q * c.inverse_mass(i) for q in p[i]] for i in range(n)]
     for i in range(n):
         outputs |= {f"{a}{i + 1}": x for a, x in zip(_AXES, xi[i], strict=True)}
         outputs |= {f"v{a}{i + 1}": v for a, v in zip(_AXES, xprime[i], strict=True)}
