@@ -44,15 +44,16 @@ def build_model(scene: Scene) -> Model:
     pars = ParTable(prec)
     H1, H2 = _split(ham, eta, varpi, pars, given.values)
     H = H1 if H2 is None else H1 + H2
+    form = ham.form
     decomposition = None
-    if ham.formulation == "canonical":
+    if form.elements:
+        system, outputs, energy, rate_of_S = _elements(ham, eta, varpi, H1, H2, pars)
+        state_varpi = None
+    else:
         system, decomposition = _canonical(ham, H, eta, varpi, pars)
         outputs = {str(v): v for v in (*eta, *varpi)}
         energy, state_varpi = H, varpi
         rate_of_S = None
-    else:
-        system, outputs, energy, rate_of_S = _elements(ham, eta, varpi, H1, H2, pars)
-        state_varpi = None
     if wants_principal_function(scene):
         S = hy.make_vars("S")
         if rate_of_S is None:
@@ -65,10 +66,8 @@ def build_model(scene: Scene) -> Model:
     events = user_events(scene, outputs, pars)
     same_numbers(pars, given)
     # (χ, λ) start at (η, ϖ): the flow of H₁ is the identity at t = 0.
-    coordinates = ("eta", "chi") if ham.formulation == "canonical" else ("chi",)
-    momenta = ("varpi", "lambda") if ham.formulation == "canonical" else ("lambda",)
-    fields = {f"{c}{i + 1}": f"initial.eta[{i}]" for c in coordinates for i in range(n)}
-    fields |= {f"{c}{i + 1}": f"initial.varpi[{i}]" for c in momenta for i in range(n)}
+    fields = {f"{form.coordinates}{i + 1}": f"initial.eta[{i}]" for i in range(n)}
+    fields |= {f"{form.momenta}{i + 1}": f"initial.varpi[{i}]" for i in range(n)}
     fields["S"] = "output.principal_function"
     return Model(
         "hamiltonian",

@@ -84,13 +84,14 @@ def numbers(scene: Scene) -> Numbers:
             # heyoka to evaluate at every Taylor order.
             value = Fraction(exact_fraction(ham.constants[key])) ** 2 / 2
             values[f"projectile.{key}_squared_half"] = fraction_text(value, prec)
-    if ham.formulation == "elements":
+    if ham.form.from_zero:
         out = scene.output
         start = out.times[0] if out.times is not None else out.grid[0]
         if exact_fraction(start) != 0:
             raise SceneError(
                 "output.times",
-                "formulation = 'elements' starts at t = 0: its elements are the initial data there",
+                f"formulation = {ham.form.name!r} starts at t = 0: its elements are the initial "
+                "data there",
             )
     # (χ, λ) start at (η, ϖ): the flow of H₁ is the identity at t = 0.
     initial: list[Any] = [*ham.eta, *ham.varpi]

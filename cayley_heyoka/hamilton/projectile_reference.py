@@ -18,7 +18,7 @@ from ..core.scene import Scene
 def closed_form(scene: Scene) -> ClosedForm | None:
     """The closed form of a canonical projectile scene without user events, else None."""
     model = scene.model
-    if model.model == "projectile" and model.formulation == "canonical" and not scene.events:
+    if model.model == "projectile" and model.form.closed_form and not scene.events:
         return ProjectileClosedForm(scene)
     return None
 

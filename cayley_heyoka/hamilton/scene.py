@@ -29,6 +29,8 @@ from ..core.precision import Number, exact_fraction, exceeds_pi, scene_mpf
 from ..core.scene import check_keys, expression_text, number, vector
 from ..core.vectors import cross, dot
 from ..mechanics.kepler import ELEMENT_KEYS, Elements
+from .formulations import FORMULATIONS as FORMULATIONS
+from .formulations import Formulation, formulation
 from .predominant_mass import system as planets
 
 MODELS = ("projectile", "predominant_mass")
@@ -39,9 +41,6 @@ MAX_BODIES = 8
 _PLANET_KEYS = ("G", "central_mass", "bodies")
 #: Digits of the predominant mass's canonical starting state in :attr:`Hamiltonian.eta`.
 STATE_DIGITS = 100
-
-
-FORMULATIONS = ("canonical", "elements")
 
 
 @dataclass(frozen=True)
@@ -64,7 +63,8 @@ class Hamiltonian:
         ``chi1 … chiN``, ``lambda1 … lambdaN`` and ``t``; or None.
     formulation
         ``"canonical"`` (η, ϖ by the canonical equations of H) or ``"elements"`` (Hamilton's
-        varying elements χ, λ of the split, :mod:`.elements`).
+        varying elements χ, λ of the split, :mod:`.elements`). :attr:`form` declares what it
+        integrates and needs (:mod:`.formulations`).
     eta, varpi
         Coordinates and momenta at the start time. For the predominant mass: the canonical
         heliocentric state, ξ of every body and pᵢ = mᵢx′ᵢ, as decimal text with
@@ -96,16 +96,12 @@ class Hamiltonian:
                 f"give one of model = {' | '.join(repr(m) for m in MODELS)}, H = '<expression>' "
                 f"or H1 and H2 (a split with its flow); got {given or 'none'}",
             )
-        formulation = table.get("formulation", "canonical")
-        if formulation not in FORMULATIONS:
-            raise SceneError(
-                "hamiltonian.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
-            )
+        form = formulation(table.get("formulation", "canonical"))
         model = table.get("model")
         if model is not None and model not in MODELS:
             raise SceneError("hamiltonian.model", f"must be one of {MODELS}, got {model!r}")
         if model == "predominant_mass":
-            return cls._predominant_mass(tables, formulation)
+            return cls._predominant_mass(tables, form)
         extra = [k for k in _PLANET_KEYS if k in table]
         if extra:
             raise SceneError(f"hamiltonian.{extra[0]}", "belongs to model = 'predominant_mass'")
@@ -119,7 +115,7 @@ class Hamiltonian:
                 if key not in table:
                     raise SceneError(f"hamiltonian.{key}", "is required by the projectile")
                 constants[key] = number(table[key], f"hamiltonian.{key}")
-            return cls(model, constants, None, None, None, formulation, eta, varpi)
+            return cls(model, constants, None, None, None, form.name, eta, varpi)
         extra = [k for k in ("g", "mu", "nu") if k in table]
         if extra:
             raise SceneError(f"hamiltonian.{extra[0]}", "belongs to model = 'projectile'")
@@ -127,24 +123,24 @@ class Hamiltonian:
             for key in ("H2", "flow"):
                 if key in table:
                     raise SceneError(f"hamiltonian.{key}", "goes with H1, not with H")
-            if formulation == "elements":
+            if form.needs_flow:
                 raise SceneError(
                     "hamiltonian.formulation",
-                    "'elements' needs the split H1, H2 and the flow of H1 ([hamiltonian.flow])",
+                    f"{form.name!r} needs the split H1, H2 and the flow of H1 ([hamiltonian.flow])",
                 )
-            return cls("expression", {}, _text(table, "H"), None, None, formulation, eta, varpi)
+            return cls("expression", {}, _text(table, "H"), None, None, form.name, eta, varpi)
         split = (_text(table, "H1"), _text(table, "H2"))
         flow = None
         if "flow" in table:
             flow = _flow(table["flow"], len(eta))
-        elif formulation == "elements":
+        elif form.needs_flow:
             raise SceneError(
-                "hamiltonian.flow", "is required by formulation = 'elements': H1's motion"
+                "hamiltonian.flow", f"is required by formulation = {form.name!r}: H1's motion"
             )
-        return cls("expression", {}, None, split, flow, formulation, eta, varpi)
+        return cls("expression", {}, None, split, flow, form.name, eta, varpi)
 
     @classmethod
-    def _predominant_mass(cls, tables: Mapping[str, Any], formulation: str) -> Hamiltonian:
+    def _predominant_mass(cls, tables: Mapping[str, Any], form: Formulation) -> Hamiltonian:
         table = tables["hamiltonian"]
         for key in ("H2", "flow", "g", "mu", "nu"):
             if key in table:
@@ -164,10 +160,15 @@ class Hamiltonian:
                     f"hamiltonian.{key}", f"is required by model = 'predominant_mass' ({meaning})"
                 )
             constants[key] = number(table[key], f"hamiltonian.{key}", positive=True)
-        bodies = tuple(_bodies(table.get("bodies"), formulation))
-        _check_bodies(bodies, formulation, constants["G"], constants["central_mass"])
+        bodies = tuple(_bodies(table.get("bodies"), form))
+        _check_bodies(bodies, form, constants["G"], constants["central_mass"])
         eta, varpi = _canonical_state(bodies, constants["G"], constants["central_mass"])
-        return cls("predominant_mass", constants, None, None, None, formulation, eta, varpi, bodies)
+        return cls("predominant_mass", constants, None, None, None, form.name, eta, varpi, bodies)
+
+    @property
+    def form(self) -> Formulation:
+        """What :attr:`formulation` integrates and needs (:mod:`.formulations`)."""
+        return formulation(self.formulation)
 
     @property
     def degrees(self) -> int:
@@ -255,7 +256,7 @@ def _mpf(value: Number) -> mpmath.mpf:
     return scene_mpf(value)
 
 
-def _bodies(value: Any, formulation: str) -> list[Body]:
+def _bodies(value: Any, form: Formulation) -> list[Body]:
     where = "hamiltonian.bodies"
     if value is None:
         raise SceneError(
@@ -267,10 +268,10 @@ def _bodies(value: Any, formulation: str) -> list[Body]:
         raise SceneError(
             where, f"must be an array of 1 to {MAX_BODIES} tables ([[hamiltonian.bodies]])"
         )
-    return [_body(b, f"{where}[{i}]", formulation) for i, b in enumerate(value)]
+    return [_body(b, f"{where}[{i}]", form) for i, b in enumerate(value)]
 
 
-def _body(table: Any, where: str, formulation: str) -> Body:
+def _body(table: Any, where: str, form: Formulation) -> Body:
     check_keys(table, ["mass", "elements", "position", "velocity"], where)
     if "mass" not in table:
         raise SceneError(f"{where}.mass", "is required")
@@ -281,7 +282,7 @@ def _body(table: Any, where: str, formulation: str) -> Body:
             raise SceneError(
                 where, f"give either elements or position and velocity, not both ({cartesian})"
             )
-        return Body(mass, elements=_elements(table["elements"], f"{where}.elements", formulation))
+        return Body(mass, elements=_elements(table["elements"], f"{where}.elements", form))
     if len(cartesian) != 2:
         raise SceneError(where, "needs its state: elements = {a, e, …}, or position and velocity")
     position = vector(table["position"], f"{where}.position", 3)
@@ -291,7 +292,7 @@ def _body(table: Any, where: str, formulation: str) -> Body:
     return Body(mass, position=position, velocity=velocity)
 
 
-def _elements(table: Any, where: str, formulation: str) -> dict[str, Number]:
+def _elements(table: Any, where: str, form: Formulation) -> dict[str, Number]:
     check_keys(table, ELEMENT_KEYS, where)
     missing = [k for k in ELEMENT_KEYS if k not in table]
     if missing:
@@ -310,7 +311,7 @@ def _elements(table: Any, where: str, formulation: str) -> dict[str, Number]:
     inclination = exact_fraction(values["inclination"])
     if inclination < 0 or exceeds_pi(values["inclination"]):
         raise SceneError(f"{where}.inclination", f"must be in [0, π], got {values['inclination']}")
-    if formulation == "elements":
+    if form.ellipses:
         if e == 0:
             raise SceneError(f"{where}.e", "must be > 0 " + _CIRCULAR)
         if inclination == 0:
@@ -338,7 +339,7 @@ def _canonical_state(bodies: tuple[Body, ...], G: Number, M: Number) -> tuple[tu
     return tuple(text[: len(eta)]), tuple(text[len(eta) :])
 
 
-def _check_bodies(bodies: tuple[Body, ...], formulation: str, G: Number, M: Number) -> None:
+def _check_bodies(bodies: tuple[Body, ...], form: Formulation, G: Number, M: Number) -> None:
     """Refuse states the formulation cannot take: coincident bodies (H is singular), and for
     Hamilton's elements unbound, rectilinear, circular or planar relative orbits."""
     with mpmath.workdps(40):
@@ -352,7 +353,7 @@ def _check_bodies(bodies: tuple[Body, ...], formulation: str, G: Number, M: Numb
                         f"starts at the position of hamiltonian.bodies[{i}]: their distance is "
                         "0 and H is singular there",
                     )
-        if formulation != "elements":
+        if not form.ellipses:
             return
         for k, (body, (x, xp)) in enumerate(zip(bodies, states, strict=True)):
             if body.elements is not None:

@@ -84,7 +84,7 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
     from ..core.engine import run
 
     orbit = scene.model
-    twin = twin or ("precision" if orbit.formulation == "cartesian" else "cartesian")
+    twin = twin or orbit.form.twin
     if twin == orbit.formulation:
         raise ValueError(f"--set twin: the scene is already {twin!r}; choose another twin")
     data = scene.to_dict()

@@ -113,11 +113,8 @@ def _build(scene: Scene, variant: str | None, variants: Any = None) -> Model:
         if not isinstance(term, UserPotential):  # a text records itself as it is parsed
             pars.source(f"perturbations.{perturbation_key(term)}", omega)
 
-    b = _Builder(orbit, pars, plane, mu, omegas, X, prec, ctx, values)
-    if orbit.formulation == "cayley":
-        b.cayley(variant)
-    else:
-        getattr(b, orbit.formulation)()
+    b = Builder(orbit, pars, plane, mu, omegas, X, prec, ctx, values)
+    orbit.form.build(b, variant)
 
     monitors, conserved = _monitors(orbit, b, ctx)
     wanted = scene.output.monitors
@@ -152,7 +149,7 @@ def _provenance(model: Model, orbit: Orbit) -> None:
         own |= {a: f"orbit.velocity[{i}]" for i, a in enumerate(CARTESIAN[3:])}
     else:
         start, own = "orbit.elements", {}
-    if orbit.formulation == "cartesian":
+    if orbit.form.cartesian:
         model.initial_fields = {v: own.get(v, start) for v in model.state_names}
     else:
         model.initial_fields = dict.fromkeys(model.state_names, start)
@@ -189,11 +186,11 @@ def validate(scene: Scene) -> None:
         energy = vectors.dot(v, v) / 2 - mu / r
         e = mpmath.sqrt(max(mpmath.mpf(0), 1 + 2 * energy * h * h / (mu * mu)))
         q = h * h / (mu * (1 + e))
-        if orbit.formulation == "encke" and e >= 1:
+        if not orbit.form.hyperbolic and e >= 1:
             raise SceneError(
                 "orbit.formulation",
-                f"'encke' follows an osculating ellipse, but the orbit starts with e = "
-                f"{mpmath.nstr(e, 6)} ≥ 1 (parabolic or hyperbolic); use 'cartesian'",
+                f"{orbit.formulation!r} follows an osculating ellipse, but the orbit starts with "
+                f"e = {mpmath.nstr(e, 6)} ≥ 1 (parabolic or hyperbolic); use 'cartesian'",
             )
         third = orbit.third_body
         if third is not None and third.degree is not None:
@@ -212,11 +209,12 @@ def validate(scene: Scene) -> None:
         # Without a disturbing function or a turning reference plane Θ, Σ, Φ are constant and
         # no cosec Φ is compiled: any inclination will do. With a limit the run starts on the
         # tilted frame below it (:mod:`.tilt`); without one, the equations need sin Φ ≠ 0.
-        if orbit.formulation == "cayley" and (orbit.perturbations or turning):
+        if orbit.form.angles and (orbit.perturbations or turning):
             if exact_fraction(orbit.equatorial_limit) == 0 and sin_phi(orbit, t) == 0:
                 raise SceneError(
                     "orbit.formulation",
-                    "'cayley' with orbit.equatorial_limit = 0 needs sin Φ ≠ 0, but the orbit "
+                    f"{orbit.formulation!r} with orbit.equatorial_limit = 0 needs sin Φ ≠ 0, but "
+                    "the orbit "
                     "starts in the reference plane (Θ and Σ are undefined there: cosec Φ in "
                     "their equations); give a limit > 0 (the run then starts on a tilted frame) "
                     "or use formulation = 'quaternion' or 'cartesian'",
@@ -224,8 +222,9 @@ def validate(scene: Scene) -> None:
 
 
 # ---------------------------------------------------------------------- the formulations
-class _Builder:
-    """Collects the system, the position and velocity expressions and the outputs."""
+class Builder:
+    """Collects the system, the position and velocity expressions and the outputs; each
+    formulation's method (:attr:`.formulations.Formulation.build`) fills them."""
 
     def __init__(self, orbit, pars, plane, mu, omegas, X, precision, ctx, values) -> None:
         self.orbit, self.pars, self.plane, self.mu = orbit, pars, plane, mu
@@ -263,7 +262,8 @@ class _Builder:
         """An expression of the Cartesian placeholders, composed with the position."""
         return hy.subs(expr, {str(x): p for x, p in zip(self.X, self.position, strict=True)})
 
-    def cartesian(self) -> None:
+    def cartesian(self, variant: None = None) -> None:
+        """ẍ = −μx/r³ + ∇Ω (no variants)."""
         x = self.X
         v = list(hy.make_vars(*CARTESIAN[3:]))
         rhs = eq.cartesian_rates(x, v, self.mu, self.force(x, vectors.dot(x, x)))
@@ -275,9 +275,9 @@ class _Builder:
         self.apsis_function = vectors.dot(x, v)
         self.radius = hy.sqrt(vectors.dot(x, x))
 
-    def encke(self) -> None:
+    def encke(self, variant: None = None) -> None:
         """δ = x − y from the osculating ellipse y, and ψ = E/2, half its eccentric anomaly
-        (:mod:`.encke`; the initial ellipse is among the numbers)."""
+        (:mod:`.encke`; the initial ellipse is among the numbers; no variants)."""
         d = list(hy.make_vars(*ENCKE[:3]))
         dv = list(hy.make_vars(*ENCKE[3:6]))
         psi = hy.make_vars(ENCKE[6])
@@ -353,7 +353,8 @@ class _Builder:
             down = 2 * hy.sin(Phi) - eps
             self.terminal.append(TerminalSpec(down, -1, turn, "equatorial_handovers"))
 
-    def quaternion(self) -> None:
+    def quaternion(self, variant: None = None) -> None:
+        """(r, ṙ, ρ, h) and the orbit frame as a unit quaternion (no variants)."""
         r, rdot, rho, h = hy.make_vars(*CAYLEY[:4])
         q = list(hy.make_vars(*QUATERNION))
         turns = self._revolutions(rho)
@@ -428,7 +429,7 @@ def _plane_expressions(
 
 
 # ---------------------------------------------------------------------- monitors and events
-def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
+def _monitors(orbit: Orbit, b: Builder, ctx: Context) -> tuple[dict, tuple]:
     """Energy; the Jacobi constant (circular perturber); k̂·(x × v) (zonal field)."""
     v2 = vectors.dot(b.velocity, b.velocity)
     energy = v2 / 2 - b.mu / b.radius
@@ -461,7 +462,7 @@ def _monitors(orbit: Orbit, b: _Builder, ctx: Context) -> tuple[dict, tuple]:
     return monitors, tuple(conserved)
 
 
-def _events(scene: Scene, orbit: Orbit, b: _Builder, pars: ParTable) -> list[EventSpec]:
+def _events(scene: Scene, orbit: Orbit, b: Builder, pars: ParTable) -> list[EventSpec]:
     events: list[EventSpec] = []
     for name in scene.output.events:
         if name == "node":
@@ -500,7 +501,7 @@ def _total(terms: list[Any]) -> Any:
     return terms[0] if len(terms) == 1 else hy.sum(terms)
 
 
-def _equatorial_function(b: _Builder) -> Any:
+def _equatorial_function(b: Builder) -> Any:
     """(sin²Φ − ε²)|L|², zero where sin Φ = ε; no square root, no division."""
     eps = b.equatorial_limit()
     L = b.momentum

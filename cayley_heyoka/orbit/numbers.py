@@ -41,8 +41,6 @@ from .tilt import FRAME, LEVEL, TILTED, angles_in
 
 #: Digits beyond the run's precision of every number computed in mpmath.
 GUARD_DIGITS = 15
-#: Formulations whose ρ sheds its whole revolutions (:mod:`.revolutions`).
-_TURNING = ("cayley", "quaternion")
 
 
 def structure(scene: Scene) -> str:
@@ -169,7 +167,7 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
     for term in orbit.perturbations:
         values |= term.values(orbit.mu, dps)
     t0 = start_time(scene)
-    if orbit.formulation == "encke":
+    if orbit.form.deviation:
         with mpmath.workdps(dps):
             try:
                 x, v = initial_cartesian(orbit, scene_mpf(t0))
@@ -184,7 +182,7 @@ def variant_numbers(scene: Scene, variant: str | None) -> Numbers:
         values |= ellipse
     else:
         state = _initial_values(orbit, t0, dps, variant)
-    if orbit.formulation in _TURNING:
+    if orbit.form.revolutions:
         turns, state[2] = revolutions.values(prec, _text(state[2], dps))
         values |= turns
     if variant is not None:
@@ -275,7 +273,7 @@ def plane_numbers(motion: PlaneMotion | None) -> dict[str, Any]:
 def hands_over(orbit: Orbit) -> bool:
     """Whether a ``cayley`` orbit can reach the reference plane: Φ can change (a perturbation,
     a turning plane) and ``equatorial_limit`` is not 0."""
-    if orbit.formulation != "cayley" or exact_fraction(orbit.equatorial_limit) == 0:
+    if not orbit.form.angles or exact_fraction(orbit.equatorial_limit) == 0:
         return False
     plane = orbit.plane
     turning = plane is not None and (
@@ -400,18 +398,18 @@ def initial_state(orbit: Orbit, t: Any, dps: int, variant: str | None = None) ->
 
 def _initial_values(orbit: Orbit, t: Any, dps: int, variant: str | None = None) -> list:
     """:func:`initial_state` as mpmath numbers with the guard digits of ``dps``."""
-    if orbit.formulation == "encke":
+    if orbit.form.deviation:
         raise ValueError("the encke state is the deviation from its ellipse: build the model")
     with mpmath.workdps(dps):
         t = scene_mpf(t)
         x, v = initial_cartesian(orbit, t)
-        if orbit.formulation == "cartesian":
+        if orbit.form.cartesian:
             values = [*x, *v]
         else:
             frame = plane_angles_at(orbit.plane, t)
             s = el.cartesian_to_cayley(x, v, sigma=scene_mpf(orbit.sigma0), frame=frame)
             values = [s.r, s.rdot, s.rho, s.h]
-            if orbit.formulation == "cayley":
+            if orbit.form.angles:
                 angles = (s.Theta, s.Sigma, s.Phi)
                 if variant == TILTED:
                     angles = angles_in(TILTED, *angles)

@@ -12,8 +12,9 @@ from ..core.precision import Number, exact_fraction, exceeds_pi
 from ..core.scene import check_keys, number, vector
 from ..mechanics.kepler import ELEMENT_KEYS
 from .disturbing import ThirdBody, Zonal, parse_perturbations
+from .formulations import FORMULATIONS as FORMULATIONS
+from .formulations import Formulation, formulation
 
-FORMULATIONS = ("cayley", "quaternion", "cartesian", "encke")
 #: Default of ``orbit.equatorial_limit``: below this sin Φ the Cayley angles are carried on a
 #: tilted working frame (:mod:`.tilt`; docs/orbits.md, "Near-equatorial orbits").
 EQUATORIAL_LIMIT = "1e-3"
@@ -60,7 +61,8 @@ class Orbit:
     formulation
         ``"cayley"`` (r, ṙ, ρ, h, Θ, Σ, Φ), ``"quaternion"`` (r, ṙ, ρ, h and the orbit frame as
         a quaternion: regular at every inclination), ``"cartesian"`` or ``"encke"`` (the
-        deviation from an osculating ellipse, rectified at every apocentre).
+        deviation from an osculating ellipse, rectified at every apocentre). :attr:`form`
+        declares what it integrates and supports (:mod:`.formulations`).
     sigma0
         Gauge Σ at the start time (where the departure point sits on the orbit).
     equatorial_limit
@@ -103,13 +105,9 @@ class Orbit:
             raise SceneError("orbit.mu", "is required: the central gravitational parameter")
         mu = number(table["mu"], "orbit.mu", positive=True)
         initial = _parse_initial(table)
-        formulation = table.get("formulation", "cayley")
-        if formulation not in FORMULATIONS:
-            raise SceneError(
-                "orbit.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
-            )
-        if formulation in ("cartesian", "encke") and "sigma0" in table:
-            raise SceneError("orbit.sigma0", f"has no meaning for formulation = {formulation!r}")
+        form = formulation(table.get("formulation", "cayley"))
+        if not form.gauge and "sigma0" in table:
+            raise SceneError("orbit.sigma0", f"has no meaning for formulation = {form.name!r}")
         sigma0 = number(table.get("sigma0", 0), "orbit.sigma0")
         limit = number(table.get("equatorial_limit", EQUATORIAL_LIMIT), "orbit.equatorial_limit")
         if 0 < exact_fraction(limit) < Fraction(1, 10**100):
@@ -130,7 +128,12 @@ class Orbit:
         plane = (
             PlaneMotion.parse(tables["reference_plane"]) if "reference_plane" in tables else None
         )
-        return cls(mu, initial, formulation, sigma0, limit, perturbations, plane)
+        return cls(mu, initial, form.name, sigma0, limit, perturbations, plane)
+
+    @property
+    def form(self) -> Formulation:
+        """What :attr:`formulation` integrates and supports (:mod:`.formulations`)."""
+        return formulation(self.formulation)
 
     def term(self, kind: type) -> Any:
         """The perturbation of the given class, or None."""
@@ -165,11 +168,10 @@ def with_formulation(scene: Any, value: str) -> dict[str, Any]:
     data = scene.to_dict()
     if value == scene.model.formulation:
         return data
-    if value not in FORMULATIONS:
-        raise SceneError("orbit.formulation", f"must be one of {FORMULATIONS}, got {value!r}")
+    target = formulation(value)
     orbit = dict(data["orbit"])
     orbit["formulation"] = value
-    if value in ("cartesian", "encke"):
+    if not target.gauge:
         orbit.pop("sigma0", None)
     data["orbit"] = orbit
     return data

@@ -48,6 +48,7 @@ from ..core.exact import exact, exact_array
 from ..core.model import ParTable, TerminalSpec
 from ..core.precision import Precision, two_pi_parts
 from . import attitude as att
+from .formulations import Formulation
 
 Expr = Any  # a heyoka expression
 #: s = (φ − nC)/SCALE: a power of two, so that the scaling is exact.
@@ -58,16 +59,17 @@ KAPPA = "0.9"
 KAPPA_START = 0.8
 
 
-def wanted(options: dict[str, Any], formulation: str) -> bool:
-    """Whether the scene's ``output.azimuth`` asks for the attitude of a reduced body."""
+def wanted(options: dict[str, Any], formulation: Formulation) -> bool:
+    """Whether the scene's ``output.azimuth`` asks for the attitude of a reduced body (one
+    whose ``formulation`` is :attr:`~.formulations.Formulation.reduced`)."""
     value = options.get("azimuth", False)
     if not isinstance(value, bool):
         raise SceneError("output.azimuth", f"must be true or false, got {value!r}")
-    if value and formulation != "poisson":
+    if value and not formulation.reduced:
         raise SceneError(
             "output.azimuth",
-            f"completes the attitude of formulation = 'poisson'; {formulation!r} reports it "
-            "already (qw … qz, lambda, mu, nu)",
+            f"completes the attitude of formulation = 'poisson'; {formulation.name!r} reports "
+            "it already (qw … qz, lambda, mu, nu)",
         )
     return value
 

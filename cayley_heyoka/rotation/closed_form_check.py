@@ -67,7 +67,7 @@ def check_rotation(scene: Scene, options: CheckOptions) -> CheckReport:
     element_keys = ("upsilon0", "samples", "nodes")
     options.accept(("method", *element_keys), "check of a forced body")
     method = options.choice("method", ("elements", "twin"))
-    if scene.model.formulation == "poisson":
+    if not scene.model.form.element_check:
         if method == "elements" or any(options.text(k) is not None for k in element_keys):
             raise ValueError(
                 "method: Cayley's element check needs the attitude, which the Euler–Poisson "
@@ -276,15 +276,18 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
     from ..core.engine import run
 
     body = scene.model
-    if body.formulation == "poisson":
+    form = body.form
+    if form.reduced:
         return _check_poisson_twin(scene, why)
-    if body.formulation not in ("rodrigues", "quaternion"):
-        raise ValueError("scene: the twin check needs an attitude (formulation 'none' has none)")
+    other = form.twin
+    if other is None:
+        raise ValueError(
+            f"scene: the twin check needs an attitude (formulation {form.name!r} has none)"
+        )
     data = scene.to_dict()
     data.pop("events", None)
     data.get("output", {}).pop("events", None)
     own = Scene.from_dict(data)
-    other = "quaternion" if body.formulation == "rodrigues" else "rodrigues"
     a, b = run(own), run(Scene.from_dict(with_formulation(own, other)))
     cert = difference_certificate(a, b)
     prec = own.integrator.precision

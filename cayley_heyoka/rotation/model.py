@@ -6,7 +6,9 @@
   re-basing event (:mod:`.charts`).
 * Quaternion: Euler's equations, ``q̇ = ½ q ⊗ (0, ω)``, the torque by the matrix gradient of V.
 
-No torque term is compiled for a torque-free scene, and no attitude for a rates-only one.
+No torque term is compiled for a torque-free scene, and no attitude for a rates-only one. The
+scene's formulation object (:mod:`.formulations`) names the attitude's part
+(:func:`rodrigues_attitude`, :func:`quaternion_attitude`, :func:`poisson_attitude`).
 """
 
 from __future__ import annotations
@@ -51,13 +53,10 @@ def build_model(scene: Scene) -> Model:
     inertia = [pars.add(name, values[name], f"body.inertia[{i}]") for i, name in enumerate("ABC")]
     rates = list(hy.make_vars("p", "q", "r"))
     outputs: dict[str, Any] = dict(zip("pqr", rates, strict=True))
-    attitude = None
-    if body.formulation == "rodrigues":
-        attitude = _rodrigues(body, pars, rates, inertia, values)
-    elif body.formulation == "quaternion":
-        attitude = _quaternion(body, pars, rates, inertia, values)
-    elif body.formulation == "poisson":
-        attitude = _poisson(body, prec, pars, rates, inertia, values)
+    build = body.form.attitude
+    attitude: _Attitude | None = (
+        None if build is None else build(body, prec, pars, rates, inertia, values)
+    )
 
     torque = attitude.torque if attitude else None
     differences = [pars.add(name, values[name], "body.inertia") for name in ("B-C", "C-A", "A-B")]
@@ -67,7 +66,7 @@ def build_model(scene: Scene) -> Model:
         system += list(zip(attitude.variables, attitude.rhs, strict=True))
         outputs.update(attitude.outputs)
         terminal = list(attitude.terminal)
-    if azimuth.wanted(scene.output.options, body.formulation):
+    if azimuth.wanted(scene.output.options, body.form):
         gamma = attitude.variables
         az = azimuth.Azimuth(pars, prec, attitude.u, values, len(system), 3)
         s = hy.make_vars("azimuth_reduced")
@@ -146,7 +145,9 @@ class _Attitude:
         self.u: Any = None  # the poisson formulation's space direction
 
 
-def _rodrigues(body, pars, rates, inertia, values) -> _Attitude:
+def rodrigues_attitude(body, prec, pars, rates, inertia, values) -> _Attitude:
+    """Cayley's kinematics of a re-based chart (:mod:`.charts`), the torque by Cayley's
+    formula (:attr:`.formulations.RODRIGUES`)."""
     a = _Attitude()
     rho = list(hy.make_vars("lambda", "mu", "nu"))
     atlas = RodriguesAtlas(pars, slice(3, 6), values)
@@ -181,7 +182,9 @@ def _rodrigues(body, pars, rates, inertia, values) -> _Attitude:
     return a
 
 
-def _quaternion(body, pars, rates, inertia, values) -> _Attitude:
+def quaternion_attitude(body, prec, pars, rates, inertia, values) -> _Attitude:
+    """``q̇ = ½ q ⊗ (0, ω)``, the torque by the matrix gradient of V
+    (:attr:`.formulations.QUATERNION`)."""
     a = _Attitude()
     quat = list(hy.make_vars("qw", "qx", "qy", "qz"))
     # The norm of q is a gauge (q and cq are one attitude; the kinematics is linear in q), but
@@ -213,8 +216,9 @@ def _quaternion(body, pars, rates, inertia, values) -> _Attitude:
     return a
 
 
-def _poisson(body, prec, pars, rates, inertia, values) -> _Attitude:
-    """The rates and γ = Rᵀu (:mod:`.poisson`): no attitude beyond the forces' direction."""
+def poisson_attitude(body, prec, pars, rates, inertia, values) -> _Attitude:
+    """The rates and γ = Rᵀu (:mod:`.poisson`): no attitude beyond the forces' direction
+    (:attr:`.formulations.POISSON`)."""
     a = _Attitude()
     u = poisson.direction(body.forces, prec)
     gamma = list(hy.make_vars(*poisson.GAMMA))

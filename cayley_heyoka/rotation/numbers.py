@@ -12,13 +12,14 @@ build compiles: the scene with its numbers masked, except the numbers that are c
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from ..core.errors import SceneError
 from ..core.model import Numbers
-from ..core.precision import exact_fraction, fraction_text
+from ..core.precision import Precision, exact_fraction, fraction_text
 from ..core.scene import Scene
 from ..core.structures import MASK as _MASK
 from ..core.structures import Table, structure_text
@@ -35,6 +36,9 @@ _FORCE_NUMBERS = {
     "gravity_gradient": ("gm", "distance", "direction"),
 }
 _REDUCED_FORCE_NUMBERS = {"heavy_top": ("weight", "center_of_mass"), "gravity_gradient": ("gm",)}
+#: A formulation's attitude numbers (:attr:`.formulations.Formulation.numbers`): its initial
+#: state after the rates, and its parameters' values.
+Attitude = tuple[list[Any], dict[str, Any]]
 
 
 def structure(scene: Scene) -> str:
@@ -56,7 +60,7 @@ def structure(scene: Scene) -> str:
     data["initial"] = dict.fromkeys(data.get("initial", {}), _MASK)
     if "max_chart_angle" in data.get("attitude", {}):
         data["attitude"] = {**data["attitude"], "max_chart_angle": _MASK}
-    masked = _REDUCED_FORCE_NUMBERS if body.formulation == "poisson" else _FORCE_NUMBERS
+    masked = _REDUCED_FORCE_NUMBERS if body.form.reduced else _FORCE_NUMBERS
     forces = dict(data.get("forces", {}))
     for key, fields in masked.items():
         if key in forces:
@@ -99,26 +103,14 @@ def numbers(scene: Scene) -> Numbers:
         momentum = att.matvec(att.quaternion_to_matrix(list(q0)), L0)
     for force in body.forces:
         values |= force.values(prec)
-    if body.formulation == "rodrigues":
-        kmax = kappa_limit(body.max_chart_angle, prec)
-        values["chart.kappa_max"] = kmax
-        # Start in the identity chart when the initial attitude fits in it, so that a short run
-        # integrates Cayley's own parameters; otherwise from a chart based at the attitude.
-        fits = q0[0] * q0[0] * prec.number(kmax) > 1
-        one, zero = prec.number(1), prec.number(0)
-        base = np.array([one, zero, zero, zero]) if fits else q0
-        initial += att.quaternion_to_rodrigues(list(q0)) if fits else [zero] * 3
-        values |= RodriguesAtlas.values_of(list(base), momentum)
-    elif body.formulation == "quaternion":
-        initial += list(q0)
-        if momentum is not None:
-            values |= {f"momentum_space[{i}]": momentum[i] for i in range(3)}
-    elif body.formulation == "poisson":
+    form = body.form
+    if form.numbers is not None:
+        state, more = form.numbers(body, prec, q0, momentum)
+        initial += state
+        values |= more
+    if azimuth.wanted(scene.output.options, form):
         u = poisson.direction(body.forces, prec)
-        gamma0 = poisson.initial_direction(q0, u, prec)
-        initial += gamma0
-    if azimuth.wanted(scene.output.options, body.formulation):
-        values |= azimuth.values(prec, u, q0, gamma0, rates0)
+        values |= azimuth.values(prec, u, q0, initial[3:6], rates0)
         initial.append(prec.number(0))
     if invariable_angle.wanted(scene.output.options):
         if not body.torque_free:
@@ -131,6 +123,47 @@ def numbers(scene: Scene) -> Numbers:
         values |= invariable_angle.values(prec, exact_inertia, rates)
         initial.append(prec.number(0))
     return Numbers(initial, values)
+
+
+def rodrigues_numbers(body: RigidBody, prec: Precision, q0: np.ndarray, momentum: Any) -> Attitude:
+    """The first chart's λ, μ, ν, its base and limit (:attr:`.formulations.RODRIGUES`)."""
+    kmax = kappa_limit(body.max_chart_angle, prec)
+    values: dict[str, Any] = {"chart.kappa_max": kmax}
+    # Start in the identity chart when the initial attitude fits in it, so that a short run
+    # integrates Cayley's own parameters; otherwise from a chart based at the attitude.
+    fits = q0[0] * q0[0] * prec.number(kmax) > 1
+    one, zero = prec.number(1), prec.number(0)
+    base = np.array([one, zero, zero, zero]) if fits else q0
+    initial = att.quaternion_to_rodrigues(list(q0)) if fits else [zero] * 3
+    values |= RodriguesAtlas.values_of(list(base), momentum)
+    return list(initial), values
+
+
+def quaternion_numbers(body: RigidBody, prec: Precision, q0: np.ndarray, momentum: Any) -> Attitude:
+    """The unit quaternion, and L in space for the invariable-plane events
+    (:attr:`.formulations.QUATERNION`)."""
+    values = {} if momentum is None else space_plane_numbers(None, momentum)
+    return list(q0), values
+
+
+def poisson_numbers(body: RigidBody, prec: Precision, q0: np.ndarray, momentum: Any) -> Attitude:
+    """γ = Rᵀu at the start (:attr:`.formulations.POISSON`; u is compiled in)."""
+    u = poisson.direction(body.forces, prec)
+    return list(poisson.initial_direction(q0, u, prec)), {}
+
+
+def chart_plane_numbers(held: Callable[[str], Any], momentum: Any) -> dict[str, Any]:
+    """The chart's parameters of the invariable-plane events: L in space and in the base
+    ``held`` keeps (:attr:`.formulations.RODRIGUES`)."""
+    base = [held(f"chart.base[{i}]") for i in range(4)]
+    chart = RodriguesAtlas.values_of(base, momentum)
+    return {k: v for k, v in chart.items() if not k.startswith("chart.base")}
+
+
+def space_plane_numbers(held: Any, momentum: Any) -> dict[str, Any]:
+    """L in space, which the quaternion's invariable-plane events hold
+    (:attr:`.formulations.QUATERNION`)."""
+    return {f"momentum_space[{i}]": momentum[i] for i in range(3)}
 
 
 #: The scene fields :func:`table` computes from, and the first state index or moment each sets.
@@ -173,7 +206,7 @@ def table(
     if any(f not in _RATES and f not in _MOMENTS for f in fields):
         return None
     options = scene.output.options
-    if azimuth.wanted(options, body.formulation) or invariable_angle.wanted(options):
+    if azimuth.wanted(options, body.form) or invariable_angle.wanted(options):
         return None
     prec = scene.integrator.precision
     moments = [float(prec.number(m)) for m in body.inertia]
@@ -209,12 +242,9 @@ def table(
             q0 = body.initial_quaternion(prec)
             L0 = [m * w for m, w in zip(columns, rates, strict=True)]
             momentum = att.matvec(att.quaternion_to_matrix(list(q0)), L0)
-            if body.formulation == "rodrigues":
-                base = [pars[0, names.index(f"chart.base[{i}]")] for i in range(4)]
-                chart = RodriguesAtlas.values_of(base, momentum)
-                values |= {k: v for k, v in chart.items() if not k.startswith("chart.base")}
-            else:
-                values |= {f"momentum_space[{i}]": momentum[i] for i in range(3)}
+            plane = body.form.plane_numbers
+            if plane is not None:
+                values |= plane(lambda name: pars[0, names.index(name)], momentum)
         for name, column in values.items():
             pars[:, names.index(name)] = column
         suspect |= ~(np.isfinite(initial).all(axis=1) & np.isfinite(pars).all(axis=1))

@@ -14,8 +14,9 @@ from ..core.precision import Number, Precision, exact_fraction, unit_length
 from ..core.scene import check_keys, number, vector
 from . import attitude as att
 from .forces import parse_forces
+from .formulations import FORMULATIONS as FORMULATIONS
+from .formulations import Formulation, formulation
 
-FORMULATIONS = ("rodrigues", "quaternion", "none", "poisson")
 #: Smallest ``attitude.max_chart_angle`` (degrees): each re-basing is a terminal event and a
 #: restart of the propagation, so below a few hundred per turn they cost more than the steps;
 #: at 1e-300 every step re-based and the run never ended.
@@ -40,7 +41,8 @@ class RigidBody:
         How the attitude is integrated: ``"quaternion"`` (the default with an attitude or a
         force: the fastest at equal error, validation/users_rotation.py), ``"rodrigues"``
         (Cayley's parameters, re-based through rotation angles near π), or ``"none"`` (rates
-        only). λ, μ, ν are outputs whichever is integrated.
+        only). λ, μ, ν are outputs whichever is integrated. :attr:`form` declares what it
+        integrates and supports (:mod:`.formulations`).
     max_chart_angle
         Rotation angle (degrees) of the Rodrigues chart at which it is re-based.
     forces
@@ -79,29 +81,20 @@ class RigidBody:
         # The quaternion: the chart's pole at θ = π shortens its Taylor steps (2–3× the
         # quaternion's steps, and more time at equal error: validation/users_rotation.py).
         default = "quaternion" if (attitude is not None or forces) else "none"
-        formulation = opts.get("formulation", default)
-        if formulation not in FORMULATIONS:
-            raise SceneError(
-                "attitude.formulation", f"must be one of {FORMULATIONS}, got {formulation!r}"
-            )
-        if formulation == "poisson" and not forces:
-            raise SceneError(
-                "attitude.formulation",
-                "'poisson' reduces a body whose forces see one fixed direction; this one has no "
-                "force (use 'none' for the rates alone)",
-            )
-        if formulation == "none" and forces:
-            raise SceneError(
-                "attitude.formulation",
-                "'none' cannot carry a force function: the torque depends on the attitude",
-            )
+        form = formulation(opts.get("formulation", default))
+        form.check_forces(bool(forces))
         angle = number(opts.get("max_chart_angle", 160), "attitude.max_chart_angle")
         if not MIN_CHART_ANGLE <= exact_fraction(angle) < 180:
             raise SceneError(
                 "attitude.max_chart_angle",
                 f"must be in [{MIN_CHART_ANGLE}, 180) degrees, got {angle}",
             )
-        return cls(inertia, rates, attitude, formulation, angle, forces)
+        return cls(inertia, rates, attitude, form.name, angle, forces)
+
+    @property
+    def form(self) -> Formulation:
+        """What :attr:`formulation` integrates and supports (:mod:`.formulations`)."""
+        return formulation(self.formulation)
 
     @property
     def torque_free(self) -> bool:
@@ -153,37 +146,36 @@ def with_formulation(scene: Any, value: str, more: bool = False) -> dict[str, An
         ``attitude.formulation``: ``value`` is unknown, or integrates another motion.
     """
     data = scene.to_dict()
-    own = scene.model.formulation
-    if value == own:
+    own: Formulation = scene.model.form
+    if value == own.name:
         return data
-    if value not in FORMULATIONS:
-        raise SceneError("attitude.formulation", f"must be one of {FORMULATIONS}, got {value!r}")
+    target = formulation(value)
     output = dict(data.get("output", {}))
-    if value == "none":
+    if not target.state:
         raise SceneError(
             "attitude.formulation",
-            f"'none' integrates the rates alone: it would drop the attitude that {own!r} "
-            "integrates",
+            f"{target.name!r} integrates the rates alone: it would drop the attitude that "
+            f"{own.name!r} integrates",
         )
-    if own == "none":
+    if not own.state:
         raise SceneError(
             "attitude.formulation",
-            f"the scene integrates the rates alone ('none'): {value!r} would add an attitude "
-            "it does not have",
+            f"the scene integrates the rates alone ({own.name!r}): {value!r} would add an "
+            "attitude it does not have",
         )
-    if own == "poisson" and output.get("azimuth") is not True and not more:
+    if own.reduced and output.get("azimuth") is not True and not more:
         raise SceneError(
             "attitude.formulation",
-            f"the scene reduces the attitude to the direction of its forces ('poisson' without "
-            f"output.azimuth): {value!r} would add the azimuth about it (set output.azimuth = "
-            "true to compare the whole attitude)",
+            f"the scene reduces the attitude to the direction of its forces ({own.name!r} "
+            f"without output.azimuth): {value!r} would add the azimuth about it (set "
+            "output.azimuth = true to compare the whole attitude)",
         )
     attitude = dict(data.get("attitude", {}))
     attitude["formulation"] = value
-    if value != "rodrigues":
+    if not target.chart:
         attitude.pop("max_chart_angle", None)
     data["attitude"] = attitude
-    if value == "poisson":
+    if target.reduced:
         output["azimuth"] = True
     else:
         output.pop("azimuth", None)

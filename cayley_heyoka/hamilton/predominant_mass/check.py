@@ -26,6 +26,7 @@ from ...core.consistency import CheckReport, CheckRow
 from ...core.exact import difference
 from ...core.precision import scene_mpf
 from ...core.scene import Scene
+from ..formulations import FORMULATIONS
 from . import system as planets
 
 
@@ -58,7 +59,7 @@ def check_formulations(scene: Scene) -> CheckReport:
         raise ValueError("scene: needs model = 'predominant_mass'")
     data = scene.to_dict()
     runs = {}
-    for formulation in ("canonical", "elements"):
+    for formulation in FORMULATIONS:
         data["hamiltonian"]["formulation"] = formulation
         runs[formulation] = run(Scene.from_dict(data))
     a, b = runs["elements"], runs["canonical"]

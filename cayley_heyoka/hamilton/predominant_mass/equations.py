@@ -83,9 +83,11 @@ class Coefficients:
         """Number of bodies N."""
         return len(self.m)
 
-    def values(self, formulation: str) -> dict[str, str]:
-        """The value of every coefficient the model of ``formulation`` uses, by parameter name
-        (``predominant_mass.<name>``), computed without building the equations.
+    def values(self, elements: bool) -> dict[str, str]:
+        """The value of every coefficient the model uses, by parameter name
+        (``predominant_mass.<name>``), computed without building the equations; ``elements``:
+        the model of Hamilton's elements
+        (:attr:`~cayley_heyoka.hamilton.formulations.Formulation.elements`).
 
         The lists are the equations': :func:`hamiltonian` and the velocities x′ = p/m of the
         canonical model, and for the elements also :func:`state_from_elements`,
@@ -101,7 +103,7 @@ class Coefficients:
             self.inverse_mass(i)
         for i, k in pairs:
             self.mutual(i, k)
-        if formulation == "elements":
+        if elements:
             self.inverse_semi_major()
             for i in range(n):
                 self.root_kepler(i)

@@ -52,7 +52,8 @@ def build_model(scene: Scene) -> Model:
         given.values,
     )
     outputs: dict[str, Any] = {}
-    if ham.formulation == "canonical":
+    form = ham.form
+    if not form.elements:
         xi = [list(hy.make_vars(*(f"{a}{i + 1}" for a in _AXES))) for i in range(n)]
         p = [list(hy.make_vars(*(f"p{a}{i + 1}" for a in _AXES))) for i in range(n)]
         system = pe.canonical_system(xi, p, c)
@@ -75,7 +76,7 @@ def build_model(scene: Scene) -> Model:
         S = hy.make_vars("S")
         system.append((S, 2.0 * pe.kinetic_energy(p, c) - H))
         outputs["S"] = S
-    if ham.formulation == "elements":
+    if form.elements:
         system, outputs, monitors = _offsets(system, outputs, monitors, 6 * n, pars, given.values)
     monitors, conserved = select_monitors(scene, monitors, ("energy", "angular_momentum"))
     events = user_events(scene, outputs, pars)
@@ -89,7 +90,7 @@ def build_model(scene: Scene) -> Model:
         monitors,
         conserved,
         events,
-        compact=ham.formulation == "elements" or n >= _COMPACT_BODIES,
+        compact=form.compact or n >= _COMPACT_BODIES,
     )
     _provenance(model)
     return model

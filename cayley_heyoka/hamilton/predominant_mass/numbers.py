@@ -65,12 +65,12 @@ def numbers(scene: Scene) -> Numbers:
     prec = scene.integrator.precision
     G, M = ham.constants["G"], ham.constants["central_mass"]
     c = pe.Coefficients(G, M, [b.mass for b in ham.bodies], None, prec)
-    values: dict[str, Any] = c.values(ham.formulation)
+    values: dict[str, Any] = c.values(ham.form.elements)
     dps = prec.dps + GUARD_DIGITS
     with mpmath.workdps(dps):
         states = [body.state(M, G) for body in ham.bodies]
     initial = initial_state(ham, _start_time(scene), dps, states)
-    if ham.formulation == "elements":
+    if ham.form.elements:
         # The state holds the offsets δz = z − z₀ (model._offsets): z₀ are parameters.
         names = start_names(len(ham.bodies))
         values |= dict(zip(names, initial, strict=True))
@@ -123,14 +123,7 @@ def initial_state(
             states = [
                 body.state(ham.constants["central_mass"], ham.constants["G"]) for body in ham.bodies
             ]
-        if ham.formulation == "canonical":
-            values = [v for x, _ in states for v in x]
-            values += [
-                scene_mpf(b.mass) * v
-                for b, (_, xp) in zip(ham.bodies, states, strict=True)
-                for v in xp
-            ]
-        else:
+        if ham.form.elements:
             values = []
             for k, (body, (x, xp)) in enumerate(zip(ham.bodies, states, strict=True)):
                 try:
@@ -138,6 +131,13 @@ def initial_state(
                 except ValueError as exc:  # the scene's checks refuse these first
                     raise SceneError(f"hamiltonian.bodies[{k}]", str(exc)) from None
                 values += list(z.as_tuple())
+        else:
+            values = [v for x, _ in states for v in x]
+            values += [
+                scene_mpf(b.mass) * v
+                for b, (_, xp) in zip(ham.bodies, states, strict=True)
+                for v in xp
+            ]
         return [mpmath.nstr(v, dps, strip_zeros=False) for v in values]
 
 
