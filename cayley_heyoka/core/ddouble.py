@@ -165,7 +165,7 @@ def _constant(name: str) -> tuple[float, float, float]:
 def constant(name: str) -> Dd:
     """``"pi"``, ``"half_pi"`` or ``"two_pi"`` as a double-double (scalars)."""
     hi, mid, _ = _constant(name)
-    return np.float64(hi), np.float64(mid)
+    return np.asarray(hi), np.asarray(mid)
 
 
 #: Table points j/256 of the transcendental functions.
@@ -209,8 +209,8 @@ def reduce(x: Dd) -> Dd:
     exact)."""
     c1, c2, c3 = _constant("two_pi")
     k = np.rint(x[0] / c1)
-    y = add(x, neg(two_prod(k, np.float64(c1))))
-    y = add(y, neg(two_prod(k, np.float64(c2))))
+    y = add(x, neg(two_prod(k, np.asarray(c1))))
+    y = add(y, neg(two_prod(k, np.asarray(c2))))
     return add_d(y, -k * c3)
 
 
@@ -218,8 +218,8 @@ def sincos(x: Dd) -> tuple[Dd, Dd]:
     """(sin x, cos x) for |x| ≤ 8."""
     h1, h2, h3 = _constant("half_pi")
     k = np.rint(x[0] / h1)
-    t = add(x, neg(two_prod(k, np.float64(h1))))
-    t = add_d(add(t, neg(two_prod(k, np.float64(h2)))), -k * h3)  # |t| ≤ π/4
+    t = add(x, neg(two_prod(k, np.asarray(h1))))
+    t = add_d(add(t, neg(two_prod(k, np.asarray(h2)))), -k * h3)  # |t| ≤ π/4
     j = np.rint(t[0] * _STEPS)
     z = add_d(t, -j / _STEPS)  # |z| ≤ 2⁻⁹
     z2 = square(z)
@@ -269,7 +269,7 @@ def _reciprocal(n: int) -> Dd:
     from fractions import Fraction
 
     hi = 1 / n
-    return np.float64(hi), np.float64(float(Fraction(1, n) - Fraction(hi)))
+    return np.asarray(hi), np.asarray(float(Fraction(1, n) - Fraction(hi)))
 
 
 # ---------------------------------------------------------------------- rounding

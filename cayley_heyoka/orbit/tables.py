@@ -54,10 +54,14 @@ from .scene import Orbit
 from .tilt import LEVEL
 
 #: The swept fields the table knows, by the orbit's initial state.
-_CARTESIAN = {("orbit", "position", i): i for i in range(3)} | {
-    ("orbit", "velocity", i): 3 + i for i in range(3)
+_CARTESIAN: dict[tuple[str | int, ...], int] = {
+    ("orbit", kind, i): 3 * j + i
+    for j, kind in enumerate(("position", "velocity"))
+    for i in range(3)
 }
-_ELEMENTS = {("orbit", "elements", k): i for i, k in enumerate(ELEMENT_KEYS)}
+_ELEMENTS: dict[tuple[str | int, ...], int] = {
+    ("orbit", "elements", k): i for i, k in enumerate(ELEMENT_KEYS)
+}
 
 #: ε of the bound, and the largest condition K a row may have (module docstring).
 _EPS = 2.0**-80
@@ -154,10 +158,10 @@ def _given(orbit: Orbit) -> list[tuple[float, float]]:
 
 def _scalar(value: Any) -> Dd:
     x, low, _, _ = double_doubles([[value]])
-    return np.float64(x[0, 0]), np.float64(low[0, 0])
+    return np.asarray(x[0, 0]), np.asarray(low[0, 0])
 
 
-def _stacked(fn: Any, *args: list[Dd]) -> list[Dd]:
+def _stacked(fn: Any, *args: list[Dd]) -> Any:
     """``fn`` of several double-doubles of the same length at once (numpy's cost is per call)."""
     n = len(args[0][0][0])
     joined = [
