@@ -217,10 +217,10 @@ def reduce(x: Dd) -> Dd:
 def sincos(x: Dd) -> tuple[Dd, Dd]:
     """(sin x, cos x) for |x| ≤ 8."""
     h1, h2, h3 = _constant("half_pi")
-    k = np.rint(x[0] / h1)
+    k = _index(x[0] / h1, 5)
     t = add(x, neg(two_prod(k, np.asarray(h1))))
     t = add_d(add(t, neg(two_prod(k, np.asarray(h2)))), -k * h3)  # |t| ≤ π/4
-    j = np.rint(t[0] * _STEPS)
+    j = _index(t[0] * _STEPS, _offset("sincos"))
     z = add_d(t, -j / _STEPS)  # |z| ≤ 2⁻⁹
     z2 = square(z)
     z3 = mul(z2, z)
@@ -248,7 +248,7 @@ def atan2(y: Dd, x: Dd) -> Dd:
     ay, ax = absolute(y), absolute(x)
     swap = ay[0] > ax[0]
     t = div(where(swap, ax, ay), where(swap, ay, ax))  # in [0, 1]
-    j = np.rint(t[0] * _STEPS)
+    j = _index(t[0] * _STEPS, _STEPS)
     c = j / _STEPS
     z = div(add_d(t, -c), add_d(mul_d(t, c), 1.0))  # atan t = atan c + atan z, |z| ≤ 2⁻⁹
     z2 = square(z)
@@ -262,6 +262,12 @@ def atan2(y: Dd, x: Dd) -> Dd:
     a = where(swap, sub(constant("half_pi"), a), a)
     a = where(x[0] < 0, sub(constant("pi"), a), a)
     return where(y[0] < 0, neg(a), a)
+
+
+def _index(x: np.ndarray, largest: int) -> np.ndarray:
+    """The nearest integer to x, kept in [−largest, largest] (NaN: 0), so that a value out of
+    range gives a wrong number, never an index out of a table."""
+    return np.clip(np.nan_to_num(np.rint(x)), -largest, largest)
 
 
 @functools.cache

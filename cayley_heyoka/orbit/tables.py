@@ -363,9 +363,14 @@ def _cayley(
         dd.sub(dd.mul(a[2], cS), dd.mul(a[1], sS)),
         dd.add(dd.mul(a[0], sS), dd.mul(a[3], cS)),
     ]
-    for name, value in zip(("qw", "qx", "qy", "qz"), q, strict=True):
+    # An error δ in Θ moves each component by half its partner's size times δ, and Θ errs
+    # like A/sin Φ = A/(2 sin(Φ/2) cos(Φ/2)): qx, qy (∝ sin(Φ/2)) by A/cos(Φ/2), qw, qz by
+    # A/sin(Φ/2). With a gauge Σ ≠ 0 the components mix: the whole of K for each.
+    A = K * sin_phi
+    plain = sigma[0] == 0 and sigma[1] == 0
+    for name, value, part in zip(("qw", "qx", "qy", "qz"), q, (sP, cP, cP, sP), strict=True):
         out[name] = value
-        bounds[name] = _EPS * K
+        bounds[name] = _EPS * (A / np.abs(part[0]) + _ANGLE) if plain else _EPS * K
     return out, bounds, doubtful
 
 
