@@ -32,7 +32,6 @@ import threading
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -220,8 +219,9 @@ def _double(value: Any) -> tuple[float, float, bool]:
         return float("inf"), 0.0, False
     if not math.isfinite(x):
         return x, 0.0, False
-    rest = f - Fraction(x)
-    return x, (rest.numerator / rest.denominator if rest else 0.0), not rest
+    p, q = x.as_integer_ratio()
+    rest = f.numerator * q - p * f.denominator  # (f − x) f.denominator q, in integers
+    return x, (rest / (f.denominator * q) if rest else 0.0), not rest
 
 
 def table_for(
