@@ -92,10 +92,11 @@ class Family:
         ``numbers(scene) -> Numbers`` (:class:`~.model.Numbers`) the values ``build`` gives
         its state and parameters, without building an expression. Both or neither.
     table
-        ``(scene, model, fields, values, exact) -> Table | None`` (:func:`.structures.table_for`):
-        the numbers of many scenes that are ``scene`` (whose model is ``model``) with other
-        double ``values`` (``(scenes, fields)``; ``exact``: each is its scene's number exactly)
-        at the scene paths ``fields``, as arrays rounded as ``numbers`` rounds; rows it cannot
+        ``(scene, model, fields, values, exact, low) -> Table | None``
+        (:func:`.structures.table_for`): the numbers of many scenes that are ``scene`` (whose
+        model is ``model``) with other double ``values`` (``(scenes, fields)``; ``exact``: each
+        is its scene's number exactly; ``low``: the number minus the double, to a double) at
+        the scene paths ``fields``, as arrays rounded as ``numbers`` rounds; rows it cannot
         vouch for marked suspect; None where it offers none for these fields. Optional.
     """
 

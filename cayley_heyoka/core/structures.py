@@ -27,6 +27,7 @@ scene would refuse; its rows are checked against two members built in full.
 from __future__ import annotations
 
 import json
+import math
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
@@ -183,30 +184,44 @@ def doubles(values: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     doubles, correctly rounded as a scene holds them; with whether each is that double exactly,
     and whether double holds it (finite, and zero or a normal number: :meth:`.Precision.hold`).
     """
+    x, _, exact, held = double_doubles(values)
+    return x, exact, held
+
+
+def double_doubles(values: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`doubles`, with the rest of each number: ``(x, low, exact, held)``, ``low``
+    the double nearest to the number minus ``x`` (0 where ``x`` is the number), so that
+    ``x + low`` is the number to about 2⁻¹⁰⁷ of it (:mod:`.ddouble`)."""
     try:
         x = np.array(values, dtype=np.float64, ndmin=2)
     except (OverflowError, ValueError, TypeError):
         x = None
     if x is not None and all(type(v) is float for row in values for v in row):
         exact = np.ones(x.shape, dtype=bool)  # a float is its own double
+        low = np.zeros(x.shape)
     else:
         rows = [[_double(v) for v in row] for row in values]
-        x = np.array([[d for d, _ in row] for row in rows], dtype=np.float64, ndmin=2)
-        exact = np.array([[e for _, e in row] for row in rows], dtype=bool, ndmin=2)
+        x = np.array([[d for d, _, _ in row] for row in rows], dtype=np.float64, ndmin=2)
+        low = np.array([[r for _, r, _ in row] for row in rows], dtype=np.float64, ndmin=2)
+        exact = np.array([[e for _, _, e in row] for row in rows], dtype=bool, ndmin=2)
     held = np.isfinite(x) & ((x == 0) | (np.abs(x) >= SMALLEST_NORMAL)) & ((x != 0) | exact)
-    return x, exact, held
+    return x, low, exact, held
 
 
-def _double(value: Any) -> tuple[float, bool]:
+def _double(value: Any) -> tuple[float, float, bool]:
     try:
         f = exact_fraction(value)
     except (ValueError, OverflowError, TypeError):
-        return float("nan"), False
+        return float("nan"), 0.0, False
     try:
         x = f.numerator / f.denominator  # correctly rounded
     except OverflowError:
-        return float("inf"), False
-    return x, exact_fraction(x) == f
+        return float("inf"), 0.0, False
+    if not math.isfinite(x):
+        return x, 0.0, False
+    p, q = x.as_integer_ratio()
+    rest = f.numerator * q - p * f.denominator  # (f − x) f.denominator q, in integers
+    return x, (rest / (f.denominator * q) if rest else 0.0), not rest
 
 
 def table_for(
@@ -245,8 +260,8 @@ def table_for(
         return None
     if structure_of(scene) is None:
         return None
-    x, exact, held = doubles(values)
-    table = family.table(scene, model, tuple(fields), x, exact)
+    x, low, exact, held = double_doubles(values)
+    table = family.table(scene, model, tuple(fields), x, exact, low)
     if table is None:
         return None
     suspect = table.suspect | ~held.all(axis=1)

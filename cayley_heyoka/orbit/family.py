@@ -21,4 +21,5 @@ FAMILY = Family(
     memoirs=("cayley1860",),
     structure=later("cayley_heyoka.orbit.numbers", "structure"),
     numbers=later("cayley_heyoka.orbit.numbers", "numbers"),
+    table=later("cayley_heyoka.orbit.tables", "table"),
 )

@@ -130,9 +130,17 @@ def values(precision: Precision, rho0: str) -> tuple[dict[str, str], str]:
         rho = mpmath.mpf(rho0)
         k = int(mpmath.floor(rho / C))
         reduced = turn.text(rho - k * C)
-        out = {
+    return count_values(precision, k), reduced
+
+
+def count_values(precision: Precision, k: int) -> dict[str, str]:
+    """The parameters of :class:`Revolutions` after ``k`` whole revolutions (:func:`values`
+    for a ρ₀ in [k C, (k + 1) C))."""
+    turn = _Turn.of(precision)
+    C = turn.C
+    with mpmath.workdps(turn.dps):
+        return {
             "orbit.two_pi": turn.text(C),
             "orbit.rho_offset": turn.text(k * C),
             "orbit.rho_phase": turn.text(k * (C - 2 * mpmath.pi)),
         }
-    return out, reduced

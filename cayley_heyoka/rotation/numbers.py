@@ -177,15 +177,18 @@ def table(
     fields: tuple[tuple[str | int, ...], ...],
     x: np.ndarray,
     exact: np.ndarray,
+    low: np.ndarray | None = None,
 ) -> Table | None:
     """The numbers of rigid bodies that are ``scene`` with other rates or moments, as arrays
     (double precision; :func:`cayley_heyoka.core.structures.table_for`).
 
     ``x`` holds each body's numbers at ``fields`` (``initial.rates[i]``, ``body.inertia[i]``:
     None for any other field, or where Ψ or the azimuth is wanted), ``exact`` whether each is
-    the scene's number exactly. Every value is computed in the operations, and their order,
-    that :func:`numbers` takes: a product or difference of two doubles is correctly rounded in
-    numpy as in Python, so the rows are :func:`numbers`' bit for bit (``table_for`` checks two).
+    the scene's number exactly (``low``, the rest of one that is not, is not needed: such a
+    moment is a suspect, and a rate is rounded as the scene rounds it). Every value is computed
+    in the operations, and their order, that :func:`numbers` takes: a product or difference of
+    two doubles is correctly rounded in numpy as in Python, so the rows are :func:`numbers`'
+    bit for bit (``table_for`` checks two).
     A body whose moments are not exact doubles or lie within rounding of the triangle
     inequality, or at rest with invariable-plane events, is a suspect: built alone.
 

@@ -128,3 +128,53 @@ def test_a_member_the_table_would_pass_but_its_scene_refuses_refuses_the_study(h
         expected = [float(alone.variables[n][-1]) for n in swept.final_names]
         np.testing.assert_allclose(swept.final_state[row], expected, rtol=1e-12, atol=1e-13)
         assert swept.steps[row] == alone.counters["steps"]
+
+
+ORBIT = {
+    "orbit": {"mu": "1", "formulation": "cayley",
+              "elements": {"a": "1.2", "e": "0.25", "inclination": "0.5", "node": "0.3",
+                           "argument_of_pericentre": "0.4", "mean_anomaly": "0.2"}},
+    "perturbations": {"zonal": {"J2": "1e-3", "radius": "0.5"}},
+    "output": {"times": {"start": "0", "stop": "20", "count": 3}},
+}  # fmt: skip
+
+
+@pytest.mark.covers("verb:sweep", "class:12")
+def test_orbits_at_and_over_their_limits_are_validated_alone(hostile, tmp_path):
+    """Orbits' numbers computed at once (double-double) vouch for no member at or over a limit
+    of its scene: an eccentricity that rounds to 1 in double (an ellipse, or not), a start in
+    the reference plane, a nearly rectilinear motion. Over a limit, the study is refused
+    naming the member; at it, the member runs as it would alone."""
+    e = "orbit.elements.e"
+    over = ["0.25", "0.99999999999999999999", "0.5", "1.00000000000000000001"]
+    out = tmp_path / "s.h5"
+    hostile.run(["sweep", _study(hostile, ORBIT, {e: over}), "--out", str(out)],
+                expect="refused", field=f"member 3 ({e} = 1.0): {e}")  # fmt: skip
+    assert not out.exists()
+    at = ["0.25", "0.99999999", "0.5"]
+    inclinations = ["0.5", "0", "1e-4"]  # in the plane, and below the hand-over limit
+    parameters = {e: at, "orbit.elements.inclination": inclinations}
+    hostile.run(["sweep", _study(hostile, ORBIT, parameters), "--out", str(out)],
+                expect={"done", "stopped"}, out=out)  # fmt: skip
+    swept = ch.load_sweep(out)
+    k = 0
+    for ecc in at:
+        for inclination in inclinations:
+            elements = {**ORBIT["orbit"]["elements"], "e": ecc, "inclination": inclination}
+            scene = {**ORBIT, "orbit": {**ORBIT["orbit"], "elements": elements}}
+            try:
+                alone = ch.run(ch.Scene.from_dict(scene))
+            except ch.IntegrationError as exc:
+                alone = exc.result
+            assert swept.steps[k] == alone.counters["steps"], (ecc, inclination)
+            if alone.success:
+                expected = [float(alone.variables[n][-1]) for n in swept.final_names]
+                np.testing.assert_allclose(swept.final_state[k], expected, rtol=1e-12, atol=1e-13)
+            k += 1
+    rectilinear = {"orbit.velocity[0]": ["-0.25", "1.8", "1.80000000000000000001"]}
+    scene = {**ORBIT, "orbit": {"mu": "1", "position": ["0.9", "0.2", "0.1"],
+                                "velocity": ["-0.25", "0.85", "0.45"]}}  # fmt: skip
+    scene["orbit"]["velocity"] = ["-0.25", "0.4", "0.2"]  # 1.8 = 2 × 0.9: v ∥ x
+    study, field = _study(hostile, scene, rectilinear), "member 1 (orbit.velocity[0] = 1.8)"
+    hostile.run(["sweep", study, "--out", str(tmp_path / "r.h5")],
+                expect="refused", field=f"{field}: orbit.velocity")  # fmt: skip
