@@ -105,7 +105,7 @@ def table(
     ([False, False], True)
     """
     orbit: Orbit = scene.model
-    if low is None or orbit.formulation not in ("cayley", "quaternion", "cartesian"):
+    if low is None or orbit.form.deviation:
         return None
     third = orbit.third_body
     if orbit.plane is not None or (third is not None and third.degree is not None):
@@ -192,7 +192,7 @@ def _from_cartesian(
     h = dd.sqrt(dd.add(s2, dd.square(H[2])))
     A = r[0] * speed / h[0]  # |x||v|/h: ≥ 1, large near rectilinear motion
     doubtful = ~(A <= _CONDITION_LIMIT)  # and h = 0, NaN
-    if orbit.formulation == "cartesian":
+    if orbit.form.cartesian:
         values, bounds = {}, {}
         for name, column in zip(("x", "y", "z", "vx", "vy", "vz"), columns, strict=True):
             values[name] = column
@@ -258,7 +258,7 @@ def _from_elements(
     values = {"r": r, "rdot": rdot, "h": h, "Theta": Theta, "Phi": inclination, "u": u}
     scales = {"r": r[0], "rdot": speed, "h": r[0] * speed}
     sin_phi = np.sin(inclination[0])
-    if orbit.formulation == "cartesian":
+    if orbit.form.cartesian:
         return _cartesian_state(values, scales, K, inclination, doubtful)
     K = K / sin_phi
     doubtful |= ~(K <= _CONDITION_LIMIT)
@@ -340,7 +340,7 @@ def _cayley(
     out = {"r": values["r"], "rdot": values["rdot"], "rho": rho, "h": values["h"]}
     bounds = {name: _EPS * K * scales[name] for name in ("r", "rdot", "h")}
     bounds["rho"] = angle
-    if orbit.formulation == "cayley":
+    if orbit.form.angles:  # Θ and Φ in the state; else the plane as a quaternion
         out |= {"Theta": values["Theta"], "Phi": values["Phi"]}
         bounds |= {"Theta": angle, "Phi": angle}
         return out, bounds, doubtful
