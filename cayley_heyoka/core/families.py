@@ -156,6 +156,26 @@ class Family:
         return data
 
 
+def named(choices: Mapping[str, Any], field: str, name: Any) -> Any:
+    """The entry of ``choices`` (a family's formulations by name) that scene key ``field``
+    names; the refusal lists the names.
+
+    Raises
+    ------
+    SceneError
+        ``field``: ``name`` (of any type: a list, a dictionary) is none of ``choices``.
+
+    Examples
+    --------
+    >>> named({"a": 1}, "model.formulation", "a")
+    1
+    """
+    found = choices.get(name) if isinstance(name, str) else None
+    if found is None:
+        raise SceneError(field, f"must be one of {tuple(choices)}, got {name!r}")
+    return found
+
+
 def later(module: str, name: str) -> Callable[..., Any]:
     """``module.name`` (``name`` may be dotted: ``"Class.method"``) called with the same
     arguments, imported at the first call: a family's record imports nothing of the family,

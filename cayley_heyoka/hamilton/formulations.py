@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..core.errors import SceneError
+from ..core.families import named
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +89,4 @@ def formulation(name: Any) -> Formulation:
     SceneError
         ``hamiltonian.formulation``: ``name`` is none of :data:`FORMULATIONS`.
     """
-    found = BY_NAME.get(name) if isinstance(name, str) else None
-    if found is None:
-        raise SceneError("hamiltonian.formulation", f"must be one of {FORMULATIONS}, got {name!r}")
-    return found
+    return named(BY_NAME, "hamiltonian.formulation", name)

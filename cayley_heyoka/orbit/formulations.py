@@ -15,8 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..core.errors import SceneError
-from ..core.families import later
+from ..core.families import later, named
 
 _MODEL = "cayley_heyoka.orbit.model"
 
@@ -115,7 +114,4 @@ def formulation(name: Any) -> Formulation:
     SceneError
         ``orbit.formulation``: ``name`` is none of :data:`FORMULATIONS`.
     """
-    found = BY_NAME.get(name) if isinstance(name, str) else None
-    if found is None:
-        raise SceneError("orbit.formulation", f"must be one of {FORMULATIONS}, got {name!r}")
-    return found
+    return named(BY_NAME, "orbit.formulation", name)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..core.errors import SceneError
-from ..core.families import later
+from ..core.families import later, named
 
 _MODEL = "cayley_heyoka.rotation.model"
 _NUMBERS = "cayley_heyoka.rotation.numbers"
@@ -132,7 +132,4 @@ def formulation(name: Any) -> Formulation:
     SceneError
         ``attitude.formulation``: ``name`` is none of :data:`FORMULATIONS`.
     """
-    found = BY_NAME.get(name) if isinstance(name, str) else None
-    if found is None:
-        raise SceneError("attitude.formulation", f"must be one of {FORMULATIONS}, got {name!r}")
-    return found
+    return named(BY_NAME, "attitude.formulation", name)
