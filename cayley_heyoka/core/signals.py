@@ -27,7 +27,7 @@ deferral during propagations.
 
 from __future__ import annotations
 
-import _signal  # signal's own functions, without its enum conversions: see DeferredSignals
+import _signal  # type: ignore[import-not-found]  # signal's C functions: see DeferredSignals
 import contextlib
 import os
 import queue
