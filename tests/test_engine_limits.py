@@ -429,3 +429,30 @@ def test_progress_reports_each_kept_step_once_in_order(stop):
     )
     assert len(times) == result.counters["steps"]
     assert np.all(np.diff(times) > 0) and times[-1] == float(stop)
+
+
+def test_a_scene_refused_at_its_start_is_refused_at_every_run():
+    """A scene's checks are kept with its model once they pass: one that fails is run again
+    and refused again, never taken for checked."""
+    scene = ch.Scene.from_dict(
+        free_body(
+            monitors={"spike": {"expression": "1/t"}},
+            output={"times": {"start": "0", "stop": "1", "count": 3}},
+        )
+    )
+    for _ in range(2):
+        with pytest.raises(SceneError, match="spike"):
+            ch.run(scene)
+
+
+@pytest.mark.parametrize("mine", ["handler", "ignored"])
+def test_a_run_gives_back_the_callers_own_signal_handler(mine):
+    """The run's handlers are swapped in and out at C level: the caller's Python handler, or
+    an ignored SIGINT, is what stands after the run."""
+    own = (lambda signum, frame: None) if mine == "handler" else signal.SIG_IGN
+    old = signal.signal(signal.SIGINT, own)
+    try:
+        ch.run(ch.Scene.from_dict(free_body()))
+        assert signal.getsignal(signal.SIGINT) is own
+    finally:
+        signal.signal(signal.SIGINT, old)
