@@ -45,6 +45,7 @@ from .recording import (
     start_values,
 )
 from .result import Result, versions
+from .row_pars import RowPars
 from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals, held_signals
 from .span_probe import SpanProbe
@@ -236,12 +237,8 @@ class Propagation:
         self.status, self.message = 0, "every output time was reached"
         # Occurrences of recorded events logged by terminal events that stand for them.
         self._logged: list[tuple] = []
-        # The output times the current call may record (increasing), the parameter vectors of
-        # the first of them — those passed before a terminal handler changed the parameters —
-        # and the time of the next one (None: none left), for :meth:`_on_terminal`.
-        self._rows: np.ndarray = self.grid[:0]
-        self._rows_pars: list[np.ndarray] = []
-        self._next_row: Any = None
+        # The current call's output rows and the parameters each is computed with.
+        self._row_pars = RowPars(self.grid[:0])
         #: Output times recorded so far.
         self.done = 0
         self._probe = SpanProbe(scene, self.grid[0])
@@ -297,7 +294,7 @@ class Propagation:
                 self._ta.pars[:] = self._pars[: self._held]  # a signal may have poisoned them
             width = (len(model.system), len(model.pars))
             state = np.concatenate(states) if states else np.empty((0, width[0]))
-            pars = np.array(pars_rows) if pars_rows else np.empty((0, width[1]))
+            pars = np.concatenate(pars_rows) if pars_rows else np.empty((0, width[1]))
             if self._keep:
                 self._states.append(state)
                 self._pars_rows.append(pars)
@@ -418,8 +415,7 @@ class Propagation:
         resume = self._ta.time != points[0]
         if resume:
             points = _starting_at(prec, self._ta.time, points)
-        self._rows, self._rows_pars = grid[i : i + outputs], []
-        self._next_row = grid[i] if outputs else None
+        self._row_pars = RowPars(grid[i : i + outputs])
         return points, outputs, resume
 
     def _call_guard(self, left: int) -> tuple[Callable[[Any], bool] | None, int]:
@@ -444,8 +440,7 @@ class Propagation:
         """Keep a call's output rows, each with the parameters in force when it was computed."""
         self.counters["steps"] += ended.steps
         states.append(out)
-        given = self._rows_pars[: len(out)]
-        pars_rows += given + [self._pars.copy() for _ in range(len(out) - len(given))]
+        pars_rows.append(self._row_pars.take(len(out), self._pars))
         self.done += len(out)
 
     def _goes_on(self, ended: outcomes.Ended, stuck: bool, budget: int) -> bool:
@@ -589,8 +584,7 @@ class Propagation:
         if self._signals.received:
             return False  # the parameters may hold a signal's poison: stop, reported after
         t = ta.time
-        if self._next_row is not None and self._next_row <= t:
-            self._pass_rows(ta.dtime)
+        self._row_pars.passing(ta.dtime, self._pars)
         spec = self.terminal[index]
         stop = call_handler(spec, ta, self._pars, t)
         self._ta_pars[:] = self._pars[: self._held]
@@ -624,14 +618,6 @@ class Propagation:
         """After a terminal handler at ``t``: note the state for :class:`EventParity`."""
         if self._parity is not None:
             self._parity.note(ta.state, self._pars, t, self._crossings())
-
-    def _pass_rows(self, dtime: tuple[Any, Any]) -> None:
-        """The output rows up to ``dtime`` (a terminal event's double-length time) were
-        computed before its handler: they keep the parameters in force now (a row exactly at
-        the event too)."""
-        rows, given = self._rows, self._rows_pars
-        pass_rows(rows, given, dtime, self._pars)
-        self._next_row = rows[len(given)] if len(given) < len(rows) else None
 
     def snapshot(self) -> dict[str, Any]:
         """Everything :meth:`restore` needs to continue this run, as JSON-ready values.
@@ -769,25 +755,3 @@ def _ending_at(prec: Precision, points: np.ndarray, t: Any) -> np.ndarray:
     if prec.kind != "real":
         return np.concatenate((points, np.array([t], dtype=points.dtype)))
     return prec.array([*points, t])
-
-
-def pass_rows(
-    rows: np.ndarray, given: list[np.ndarray], dtime: tuple[Any, Any], pars: np.ndarray
-) -> None:
-    """Give the output rows up to ``dtime`` (a terminal event's time as heyoka keeps it, high
-    and low parts; increasing ``rows``, the first ``len(given)`` already given) a copy of
-    ``pars``: they were computed before the event's handler changes the parameters (a row
-    exactly at the event too).
-
-    The comparison is heyoka's own, in double-length time: where the time's last bit is
-    coarse (t ≈ 1e15 in double) an event a little before an output time can have that time
-    as its high part, and the row then comes after the handler.
-    """
-    hi, lo = dtime
-    while len(given) < len(rows) and _not_after(rows[len(given)], hi, lo):
-        given.append(pars.copy())
-
-
-def _not_after(row: Any, hi: Any, lo: Any) -> bool:
-    """Whether the output time ``row`` is at or before the double-length time ``hi + lo``."""
-    return bool(row < hi or (row == hi and not lo < 0))

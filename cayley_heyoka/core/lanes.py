@@ -41,11 +41,12 @@ from typing import Any
 import heyoka as hy
 import numpy as np
 
-from . import compiler, engine, outcomes, recording
+from . import compiler, outcomes, recording
 from .event_parity import EventParity
 from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
 from .result import EventLog
+from .row_pars import RowPars
 from .scene import IntegratorOptions
 from .signals import Cancel
 
@@ -359,21 +360,22 @@ class _LaneView:
     and building a view costs more than a handler's arithmetic."""
 
     def __init__(self, ta: Any, lane: int) -> None:
-        self._ta, self._lane = ta, lane
+        self._times, self._lane = ta.time, lane  # heyoka's times: a view, as the state
         self.state: np.ndarray = ta.state[:, lane]
+        #: The lane's column of the integrator's parameters (a view).
+        self.pars: np.ndarray = ta.pars[:, lane]
 
     @property
     def time(self) -> float:
-        return float(self._ta.time[self._lane])
+        return float(self._times[self._lane])
 
 
 @dataclass
 class _Member:
     """A lane's member and where it stands in the engine's schedule of calls.
 
-    ``rows`` are the output times the lane's current call may record and ``rows_pars`` the
-    parameter vectors of the first of them, those passed before a terminal handler changed
-    the parameters (as in :meth:`cayley_heyoka.core.engine.Propagation._on_terminal`).
+    ``row_pars`` holds the output times the lane's current call may record and the
+    parameters each is computed with (:class:`~.row_pars.RowPars`, as in the scalar engine).
     """
 
     index: int
@@ -382,8 +384,7 @@ class _Member:
     stopped_at: tuple | None = None
     done: int = 0
     steps: int = 0
-    rows: np.ndarray | None = None
-    rows_pars: list[np.ndarray] = field(default_factory=list)
+    row_pars: RowPars | None = None
     counters: dict[str, int] = field(default_factory=dict)
     status: int = 0
     message: str = "every output time was reached"
@@ -419,7 +420,7 @@ class _Lanes:
         for ev in ta.t_events if model.terminal else ():
             ev.callback.target = self._on_terminal
         self.views = [_LaneView(ta, j) for j in range(self.width)]
-        self.ta_pars = ta.pars  # a view, as the views' states
+        self.hi, self.lo = ta.dtime  # views, as the views' states
 
     def run(self, initial: np.ndarray, pars: np.ndarray, terminal: Any) -> None:
         """Members a batch at a time: one call over the whole grid, the usual case; a batch in
@@ -465,7 +466,7 @@ class _Lanes:
         if self.model.terminal:
             members = [self._member(i) for i in block]
             for m in members:
-                m.rows = grid
+                m.row_pars = RowPars(grid)
             self.lanes = [*members, *[None] * (width - len(block))]
             self.twins = [None] * len(block) + [
                 self._twin(members[-1]) for _ in range(width - len(block))
@@ -582,7 +583,7 @@ class _Lanes:
         columns = {j: self._column(j, m) for j, m in members.items()}
         for j, m in members.items():
             points, lead = columns[j]
-            m.rows, m.rows_pars = points[lead:], []
+            m.row_pars = RowPars(points[lead:])
         length = max(len(c) for c, _ in columns.values())
         # Idle lanes follow a busy one (a copy of its time, state, parameters and handlers).
         source = busy[0]
@@ -675,44 +676,41 @@ class _Lanes:
     def _keep(self, m: _Member, rows: np.ndarray) -> None:
         m.states.append(rows)
         if m.terminal:  # handlers change parameters (a chart's base): one vector per row
-            given = m.rows_pars[: len(rows)]
-            rest = [m.pars] * (len(rows) - len(given))
-            m.pars_rows.append(np.array(given + rest).reshape(len(rows), len(m.pars)))
-            m.rows_pars = []
+            schedule = m.row_pars or RowPars(self.grid[:0])
+            m.pars_rows.append(schedule.take(len(rows), m.pars))
         m.done += len(rows)
 
     def _on_terminal(self, index: int, ta: Any, lane: int) -> bool:
         """Terminal event ``index`` of lane ``lane``, within heyoka's call: its member's
         handler on a view of the lane (:class:`_LaneView`); whether the lane goes on."""
-        if self._cancelled():
+        cancel = self.cancel
+        if cancel is not None and cancel.is_set():
             return False  # its parameters may hold a Cancel's poison: stop the lane
         m = self.lanes[lane] or self.twins[lane]
         if m is None:
             raise RuntimeError(f"lane {lane} reached a terminal event with no member")
-        hi, lo = ta.dtime
-        t = hi[lane]  # heyoka's time is the high part of its double-length time
-        if m.rows is not None:
-            engine.pass_rows(m.rows, m.rows_pars, (t, lo[lane]), m.pars)
-        spec = m.terminal[index]
-        stop = call_handler(spec, self.views[lane], m.pars, t)
-        self.ta_pars[:, lane] = m.pars[: self.held]
+        t = self.hi[lane]  # heyoka's time is the high part of its double-length time
+        if m.row_pars is not None:
+            m.row_pars.passing((t, self.lo[lane]), m.pars)
+        spec, view = m.terminal[index], self.views[lane]
+        stop = call_handler(spec, view, m.pars, t)
+        view.pars[:] = m.pars[: self.held] if self.held < len(m.pars) else m.pars
         m.counters[spec.counter] += 1
-        if isinstance(stop, Handover):
-            # The variant's code is another batch integrator: the member goes to run().
-            m.status, m.handover = -1, True
-            m.message = f"handed over to the model's variant {stop.variant!r} at t = {t}"
-            return False
         if stop is not None:
+            if isinstance(stop, Handover):
+                # The variant's code is another batch integrator: the member goes to run().
+                m.status, m.handover = -1, True
+                m.message = f"handed over to the model's variant {stop.variant!r} at t = {t}"
+                return False
             m.status, m.message = -1, stop
             if spec.records is not None:
                 m.stopped_at = (spec.records, t, spec.direction)
             return False
         if m.parity is not None:
             self._gather(lane, m)
-            state = np.ascontiguousarray(self.views[lane].state)
-            m.parity.note(state, m.pars, t, m.crossings())
-        if self._cancelled():
-            ta.pars[:, lane] = np.nan  # a Cancel's poison was overwritten just above
+            m.parity.note(np.ascontiguousarray(view.state), m.pars, t, m.crossings())
+        if cancel is not None and cancel.is_set():
+            view.pars[:] = np.nan  # a Cancel's poison was overwritten just above
         return True
 
     def _out_of_steps(self, m: _Member, t: float) -> None:
