@@ -148,12 +148,13 @@ def tabulate(study: Study, members: Sequence[Member]) -> Tabled | None:
             continue
     else:
         return None
+    template = members.index(member)
     table = table_for(
         scene,
         model,
         [p.path for p in study.parameters],
         [values for _, values in members],
-        lambda k: study.member_scene(*members[k]),
+        lambda k: scene if k == template else study.member_scene(*members[k]),
     )
     return None if table is None else Tabled(scene, model, table)
 
@@ -433,8 +434,9 @@ def _record_whole(
     if all(run.pars.ndim == 1 for _, run in whole):
         pars = np.stack([run.pars for _, run in whole])
     else:  # terminal handlers changed some members' parameters: one vector per output time
+        shape = (len(grid), whole[0][1].pars.shape[-1])
         pars = np.stack(
-            [np.broadcast_to(run.pars, (len(grid), run.pars.shape[-1])) for _, run in whole]
+            [r.pars if r.pars.ndim == 2 else np.broadcast_to(r.pars, shape) for _, r in whole]
         )
     values = recording.evaluate_members(compiled, model, states, pars, grid)
     finite = np.ones(m, dtype=bool)
@@ -446,7 +448,7 @@ def _record_whole(
         part.message[e.row] = run.message
         _lane_counts(part, e.row, layout, run)
     part.status[rows[finite]] = OK
-    good = {k: v[finite] for k, v in values.items()}
+    good = values if finite.all() else {k: v[finite] for k, v in values.items()}
     _record_block(part, rows[finite], layout, prec, good, model.conserved, True)
     return set(rows[~finite].tolist())
 

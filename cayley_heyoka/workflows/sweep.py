@@ -61,36 +61,43 @@ Progress = Callable[[int, int], None]
 LAYOUT_TRIES = 64
 
 
-def layout_of(study: Study) -> Layout:
+def layout_of(study: Study, first: tuple[Scene, Any] | None = None) -> Layout:
     """The file's columns, from the first member whose model builds (among the first
     :data:`LAYOUT_TRIES`: a member whose numbers its model refuses — a body at rest with
-    invariable-plane events — fails alone, wherever it stands in the study).
+    invariable-plane events — fails alone, wherever it stands in the study), or from
+    ``first``, that member's scene and model where the caller has them (a table's template).
 
     Raises
     ------
     SceneError
         No member among those has a model: the first one's refusal, naming the member.
     """
-    from ..core.errors import SceneError
     from ..core.scene import check_units
-    from ..core.structures import model_for
 
-    first: SceneError | None = None
-    for index, values in enumerate(study.members()[:LAYOUT_TRIES]):
-        scene = study.member_scene(index, values)
-        try:
-            model = model_for(scene)
-            break
-        except SceneError as exc:
-            if first is None:
-                where = f"member {index} ({study.describe(values)}): {exc.field}"
-                first = SceneError(where, exc.constraint)
+    if first is not None:
+        scene, model = first
     else:
-        raise first if first is not None else SceneError("sweep", "has no member")
+        scene, model = _first_model(study)
     check_units(scene, [*model.outputs, *model.monitors])
     events = tuple(dict.fromkeys(e.name for e in model.events))
     grid = scene.time_grid
     return Layout(tuple(model.conserved), tuple(model.outputs), events, len(grid))
+
+
+def _first_model(study: Study) -> tuple[Scene, Any]:
+    from ..core.errors import SceneError
+    from ..core.structures import model_for
+
+    refused: SceneError | None = None
+    for index, values in enumerate(study.members()[:LAYOUT_TRIES]):
+        scene = study.member_scene(index, values)
+        try:
+            return scene, model_for(scene)
+        except SceneError as exc:
+            if refused is None:
+                where = f"member {index} ({study.describe(values)}): {exc.field}"
+                refused = SceneError(where, exc.constraint)
+    raise refused if refused is not None else SceneError("sweep", "has no member")
 
 
 def _validated(study: Study, indexed: list, keep: bool) -> tuple[list[Scene] | None, Tabled | None]:
@@ -202,7 +209,7 @@ def run_sweep(
     members = study.members()
     indexed = list(enumerate(members))
     scenes, tabled = _validated(study, indexed, keep=run.backend == "local")
-    layout = layout_of(study)
+    layout = layout_of(study, (tabled.scene, tabled.model) if tabled is not None else None)
     prec = study.precision
     result = empty_result(study, members, layout, prec)
     # The cluster first: a scheduler that cannot be reached is refused before anything is
