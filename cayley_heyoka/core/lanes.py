@@ -101,11 +101,14 @@ class _Everything:
     def block(self, block, out, res, recorded, pars, end, members) -> None:
         for j, index in enumerate(block):
             events = recorded(j)
-            counters, own = {"steps": outcomes.Ended.of(res[j]).steps}, pars[index]
-            if members is not None:  # terminal handlers: their tallies, parameters per row
-                counters, own = members[j].counters, np.concatenate(members[j].pars_rows)
+            if members is None:
+                counters, own = {"steps": outcomes.Ended.of(res[j]).steps}, pars[index]
+                states = out[:, :, j].copy()
+            else:  # terminal handlers: their tallies, parameters per row, rows kept
+                m = members[j]
+                counters, own, states = m.counters, _joined(m.pars_rows), _joined(m.states)
             self.results[index] = LaneResult(
-                out[:, :, j].copy(),
+                states,
                 own,
                 0,
                 "every output time was reached",
@@ -734,6 +737,11 @@ class _Lanes:
         return LaneResult(
             states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite, m.handover
         )
+
+
+def _joined(pieces: list[np.ndarray]) -> np.ndarray:
+    """Rows kept in pieces, as one array (the one piece itself, the usual case)."""
+    return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
 
 
 def _finite_dtime(ta: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -73,9 +73,20 @@ class RowPars:
         """The first ``n`` rows' parameter vectors, ``(n, len(pars))``: each the copy noted
         for it, the rest ``pars`` (in force now). The schedule is then spent: a later take
         gives every row ``pars``."""
+        marks, self._marks, self._next = self._marks, [], None
+        if pars.dtype == np.float64:
+            out = np.empty((n, len(pars)))
+            done = 0
+            for count, noted in marks:
+                if count > done:
+                    out[done : min(count, n)] = noted
+                    done = min(count, n)
+            out[done:] = pars
+            return out
+        # heyoka's real128 and real: an array of the vectors (no block assignment into an
+        # uninitialised array of those dtypes).
         vectors: list[np.ndarray] = []
-        for count, noted in self._marks:
+        for count, noted in marks:
             vectors += [noted] * (min(count, n) - len(vectors))
         vectors += [pars] * (n - len(vectors))
-        self._marks, self._next = [], None
         return np.array(vectors).reshape(n, len(pars))
