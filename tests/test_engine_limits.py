@@ -320,6 +320,34 @@ def test_a_span_within_the_budget_runs(monkeypatch):
     _same(snug, whole)
 
 
+def test_a_scene_run_again_is_not_probed_again_and_a_refused_span_stays_refused(monkeypatch):
+    """The probe's estimate is made of the scene's first steps, the same at every run of that
+    scene object: once it found the span fits, a run of the scene again takes no probe (the
+    same bits); a span refused is refused at every run."""
+    data = free_body(
+        attitude={"formulation": "quaternion"},
+        output={"times": {"start": "0", "stop": "2000", "count": 201}},
+    )
+    scene = ch.Scene.from_dict(data)
+    estimates = []
+    real = span_probe.SpanProbe.after
+    monkeypatch.setattr(
+        span_probe.SpanProbe, "after", lambda self, *a: estimates.append(a) or real(self, *a)
+    )
+    first = ch.run(scene)
+    probed = len(estimates)
+    again = ch.run(scene)
+    assert probed >= 1 and len(estimates) == probed
+    assert first.counters == again.counters
+    _same(first, again)
+    data["integrator"] = {"max_steps": 1000}
+    data["output"] = {"times": {"start": "0", "stop": "1e9", "count": 2}}
+    refused = ch.Scene.from_dict(data)
+    for _ in range(2):
+        with pytest.raises(SceneError, match="output.times: the span to t = 1e9 needs about"):
+            ch.run(refused)
+
+
 @pytest.mark.parametrize("terminal", [False, True])
 def test_a_run_well_inside_its_budget_pays_only_the_short_probe(monkeypatch, terminal):
     """The estimate's first probe is short (16 steps), so a run pays a few steps for it; the

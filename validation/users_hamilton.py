@@ -19,9 +19,10 @@ process, median and spread of the repeats):
    (wall ÷ steps) ÷ (wall ÷ steps);
 2. the whole ``run()`` of the scene (integrator compiled and cached) against the floor's reset
    and ``propagate_grid`` over the same output times;
-3. (reported, not judged) row 2 with the engine's span probe off: its first call, cut after
-   16 steps and taken again from the start (``cayley_heyoka.core.span_probe``), is part of
-   row 2's excess over the floor.
+3. (reported, not judged) row 2 with the engine's span probe off: a scene's first run cuts
+   its first call after 16 steps and takes it again from the start
+   (``cayley_heyoka.core.span_probe``); a run of the same scene again is not probed, so
+   rows 2 and 3 should agree.
 
 The notes give heyoka's decomposition sizes of both systems, the step counts and the largest
 difference of the final positions and velocities of the two.

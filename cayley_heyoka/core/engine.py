@@ -125,15 +125,18 @@ def model_of(scene: Scene) -> Model:
 
 
 class _Held:
-    """What a run of a scene needs that does not change from run to run: its model, and
-    whether the refusals that depend on the scene alone were checked (they passed)."""
+    """What a run of a scene needs that does not change from run to run: its model, whether
+    the refusals that depend on the scene alone were checked (they passed), and whether its
+    span was probed and found to fit (:mod:`.span_probe`: a run's first steps, the same at
+    every run of the scene)."""
 
-    __slots__ = ("model", "ref", "checked")
+    __slots__ = ("model", "ref", "checked", "probed")
 
     def __init__(self, scene: Scene, model: Model) -> None:
         self.ref = weakref.ref(scene)
         self.model = model
         self.checked = False
+        self.probed = False
 
 
 def _held(scene: Scene) -> _Held:
@@ -242,6 +245,9 @@ class Propagation:
         #: Output times recorded so far.
         self.done = 0
         self._probe = SpanProbe(scene, self.grid[0])
+        self._scene_record = held
+        if held.probed:
+            self._probe.done()
 
     @property
     def time(self) -> Any:
@@ -375,6 +381,7 @@ class Propagation:
             if self._probe.limit is not None:
                 cut = ended.outcome == hy.taylor_outcome.step_limit and limit < left and not stuck
                 self._probe.after(self.counters["steps"] + ended.steps, ta.dtime, budget, cut)
+                self._scene_record.probed = self._probe.fits
                 if cut:
                     # Resuming this call would change bits (see below): start again, uncut.
                     ta = self._restart()

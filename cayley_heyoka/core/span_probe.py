@@ -7,7 +7,8 @@ depend on the cut. After each, :meth:`SpanProbe.after` extrapolates the rate of 
 over the span: it must stay within :data:`ESTIMATE_MARGIN` times the budget; the margin leaves
 room for motions whose steps lengthen (an estimate, so only the absurd is refused). The first
 probe is short, so that a run pays for it a few steps only: when its estimate is not
-:data:`CLEAR` times inside the limit, the longer probe decides.
+:data:`CLEAR` times inside the limit, the longer probe decides. A scene object whose span
+was found to fit is not probed again when it is run again (its first steps are the same).
 """
 
 from __future__ import annotations
@@ -48,6 +49,9 @@ class SpanProbe:
         self.scene = scene
         self.start = start
         self._left = list(PROBES)
+        #: Whether an estimate found the span within the budget's margin (a run of the same
+        #: scene, taking the same first steps, need not probe again).
+        self.fits = False
 
     @property
     def limit(self) -> int | None:
@@ -81,6 +85,7 @@ class SpanProbe:
         if cut and probes and needed * CLEAR > limit:
             return  # not clearly within the budget: the next, longer probe decides
         probes.clear()
+        self.fits = needed <= limit
         if needed > limit:
             _, last = self.scene.output.span()
             raise SceneError(
