@@ -274,16 +274,16 @@ def table_for(
     suspect = table.suspect | ~held.all(axis=1)
     table = Table(table.initial, table.pars, suspect)
     with _LOCK:
-        held = _STRUCTURES.get((scene.family, key))
+        built = _STRUCTURES.get((scene.family, key))
     swept = tuple(fields)
-    if held is not None and swept in held.tables:
+    if built is not None and swept in built.tables:
         return table
     trusted = np.flatnonzero(~suspect)
     for k in dict.fromkeys(trusted[[0, -1]].tolist() if len(trusted) else ()):
         of_k = scene_of(k)
         _check_row(family.name, model if of_k is scene else model_for(of_k), table, k)
-    if held is not None and len(trusted):
-        held.tables.add(swept)
+    if built is not None and len(trusted):
+        built.tables.add(swept)
     return table
 
 
