@@ -270,3 +270,34 @@ def test_a_double_grid_is_built_as_each_time_alone_would_be(start, stop, count):
     a, b, n = p.number(start), p.number(stop), p.number(count - 1)
     alone = [a + (b - a) * p.number(k) / n for k in range(count)]
     assert scene.output.time_grid(p).tolist() == alone
+
+
+# ---------------------------------------------------------------------- derived scenes
+def test_a_derived_scene_sets_and_drops_fields_and_leaves_its_source_alone():
+    data = free_body(
+        events={"p_zero": {"expression": "p"}},
+        output={"times": {"start": "0", "stop": "3", "count": 4}},
+    )
+    scene = Scene.from_dict(data)
+    derived = scene.derive(
+        {"integrator.max_steps": 1000, "output.times": ["0", "1.5"]}, drop=("events", "nowhere.x")
+    )
+    assert derived.integrator.max_steps == 1000
+    assert [float(t) for t in derived.time_grid] == [0.0, 1.5]
+    assert not derived.events and "events" not in derived.to_dict()
+    assert scene.events and len(scene.time_grid) == 4  # the source scene is as it was
+    assert scene.to_dict() == Scene.from_dict(data).to_dict()
+
+
+def test_a_derived_scene_is_validated_as_one_written_so():
+    scene = Scene.from_dict(free_body())
+    with pytest.raises(SceneError, match="integrator.tolerance"):
+        scene.derive({"integrator.tolerance": "-1"})
+    with pytest.raises(SceneError, match="integrator.colour: unknown key"):
+        scene.derive({"integrator.colour": "blue"})
+
+
+def test_a_path_through_a_value_is_refused_by_name():
+    scene = Scene.from_dict(free_body()).derive({"integrator.max_steps": 5})
+    with pytest.raises(SceneError, match=r"integrator.max_steps: must be a table to set"):
+        scene.derive({"integrator.max_steps.deeper": 1})

@@ -16,7 +16,7 @@ import numpy as np
 
 from .certificate import Certificate, worst, written
 from .precision import Precision
-from .scene import Scene, with_options
+from .scene import Scene
 
 
 def with_precision(scene: Scene, prec: Precision, tolerance: Any = None) -> Scene:
@@ -30,12 +30,12 @@ def with_precision(scene: Scene, prec: Precision, tolerance: Any = None) -> Scen
         A number or the tolerance that ``prec`` cannot take, naming ``precision`` or
         ``tolerance`` (:class:`~cayley_heyoka.core.errors.OptionError`).
     """
-    return with_options(
-        scene,
+    return scene.derive(
         {
-            "integrator.precision": ("precision", prec.to_spec()),
-            "integrator.tolerance": ("tolerance", "auto" if tolerance is None else tolerance),
+            "integrator.precision": prec.to_spec(),
+            "integrator.tolerance": "auto" if tolerance is None else tolerance,
         },
+        options={"integrator.precision": "precision", "integrator.tolerance": "tolerance"},
     )
 
 

@@ -50,6 +50,7 @@ from .precision import (
     shown,
     unit_length,
 )
+from .scene_dicts import edited, plain_copy
 
 _DIRECTIONS = {"any": 0, "up": 1, "down": -1}
 
@@ -608,6 +609,52 @@ class Scene:
         """The plain dictionary this scene was built from (a new copy each call)."""
         return pickle.loads(self._source_bytes)
 
+    def derive(
+        self,
+        changes: Mapping[str, Any] | None = None,
+        drop: Iterable[str] = (),
+        options: Mapping[str, str] | None = None,
+    ) -> Scene:
+        """This scene with fields set or removed, validated as a scene written so would be.
+
+        The one way the package makes a scene from another — a planner's pilot, a check's
+        twin, an option that sets a field: the changes go through :meth:`from_dict`, the one
+        input path, and a derived scene of the same structure shares its compiled code and
+        built model (:mod:`.structures`).
+
+        Parameters
+        ----------
+        changes
+            ``{path: value}``, a path being dotted table names ending in the key set, e.g.
+            ``{"integrator.max_steps": 1000}``; the value replaces what stands there (a
+            table replaces the whole table).
+        drop
+            Paths removed, where present (``"events"``, ``"output.events"``).
+        options
+            ``{path: option}``: the option that set a path (``"--tolerance"``), which names a
+            refusal of that field or of one inside it.
+
+        Raises
+        ------
+        SceneError
+            A field the derived scene refuses (:class:`~.errors.OptionError`, naming the
+            option, where ``options`` names it).
+
+        Examples
+        --------
+        >>> import cayley_heyoka as ch
+        >>> scene = ch.load_scene("examples/free_body.toml")
+        >>> scene.derive({"integrator.max_steps": 10}).integrator.max_steps
+        10
+        """
+        try:
+            return Scene.from_dict(edited(self.to_dict(), changes or {}, drop))
+        except SceneError as exc:
+            for path, option in (options or {}).items():
+                if exc.field == path or exc.field.startswith(path + "."):
+                    raise OptionError(option, exc.constraint) from None
+            raise
+
     @functools.cached_property
     def _source_bytes(self) -> bytes:
         # Every result carries its scene: unpickling the plain source is ~3× faster than
@@ -637,40 +684,6 @@ def require_scene(scene: Any, name: str = "scene") -> Scene:
         else "Scene.from_dict, Scene.from_toml or load_scene(path)"
     )
     raise TypeError(f"{name} must be a Scene (build it with {how}), got {type(scene).__name__}")
-
-
-def with_options(scene: Scene, options: Mapping[str, tuple[str, Any]]) -> Scene:
-    """``scene`` with fields set by options, through :meth:`Scene.from_dict` (the one input
-    path: the option's value is checked as the field's, in the run's precision).
-
-    Parameters
-    ----------
-    options
-        ``{field: (option, value)}``, e.g. ``{"integrator.tolerance": ("--tolerance", "1e-20")}``;
-        a field is a dotted path of tables.
-
-    Raises
-    ------
-    OptionError
-        When the scene refuses one of these fields (or a field inside it, such as
-        ``integrator.precision.bits``), named by its option.
-    SceneError
-        When the scene refuses another field (a precision the scene's numbers do not fit).
-    """
-    data = scene.to_dict()
-    for path, (_, value) in options.items():
-        node = data
-        *tables, key = path.split(".")
-        for table in tables:
-            node = node.setdefault(table, {})
-        node[key] = value
-    try:
-        return Scene.from_dict(data)
-    except SceneError as exc:
-        for path, (option, _) in options.items():
-            if exc.field == path or exc.field.startswith(path + "."):
-                raise OptionError(option, exc.constraint) from None
-        raise
 
 
 #: The longest unit text ``output.units`` takes (units are labels, not documents).
@@ -767,27 +780,3 @@ def parse_toml(text: str, what: str = "scene") -> dict[str, Any]:
         children = node.values() if isinstance(node, Mapping) else node
         stack += [(c, depth + 1) for c in children if isinstance(c, Mapping | list)]
     return data
-
-
-def plain_copy(data: Any) -> Any:
-    """Deep copy into JSON-friendly types: a number of another kind (numpy, Fraction,
-    real128, mpmath) becomes the int, float or text with its exact value that the scene was
-    built from (:func:`~cayley_heyoka.core.precision.as_number`), so that the copy gives the
-    same scene again."""
-    kind = type(data)
-    if kind is str or kind is float or kind is int or kind is bool or data is None:
-        return data  # the common leaves first: a sweep copies every member's scene
-    if kind is dict:
-        return {str(k): plain_copy(v) for k, v in data.items()}
-    if kind is list:
-        return [plain_copy(v) for v in data]
-    if isinstance(data, Mapping):
-        return {str(k): plain_copy(v) for k, v in data.items()}
-    if isinstance(data, list | tuple):
-        return [plain_copy(v) for v in data]
-    if data is None or isinstance(data, bool | str | int | float):
-        return data
-    try:
-        return as_number(data)
-    except (TypeError, ValueError):
-        return str(data) if isinstance(data, Fraction | np.generic) else data

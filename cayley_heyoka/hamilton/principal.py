@@ -105,11 +105,10 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
     """
     if scene.family != "hamiltonian":
         raise ValueError(f"scene: needs the hamiltonian family, got {scene.family!r}")
-    data = scene.to_dict()
-    data.setdefault("output", {})["principal_function"] = True
     # The Jacobians are taken with respect to η(t₀), ϖ(t₀): the canonical state.
-    data["hamiltonian"]["formulation"] = "canonical"
-    scene = Scene.from_dict(data)
+    scene = scene.derive(
+        {"output.principal_function": True, "hamiltonian.formulation": "canonical"}
+    )
     model = model_for(scene)
     prec = scene.integrator.precision
     n = scene.model.degrees

@@ -82,13 +82,10 @@ def check_projectile(scene: Scene) -> CheckReport:
 
     if scene.model.model != "projectile":
         raise ValueError("scene: needs model = 'projectile'")
-    data = scene.to_dict()
-    data.pop("events", None)
-    result = run(Scene.from_dict(data))
+    result = run(scene.derive(drop=("events",)))
     # The closed form needs only the constants and the initial state; whichever formulation
     # the run took, it records η and ϖ.
-    data["hamiltonian"]["formulation"] = "canonical"
-    closed = closed_form(Scene.from_dict(data))
+    closed = closed_form(scene.derive({"hamiltonian.formulation": "canonical"}, drop=("events",)))
     prec = scene.integrator.precision
     cert = closed.certificate(result, prec.dps + 3)
     steps = int(result.counters.get("steps", 0))

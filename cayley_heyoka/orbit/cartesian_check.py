@@ -32,6 +32,7 @@ from ..core.consistency import (
 )
 from ..core.exact import difference, exact
 from ..core.scene import Scene
+from ..core.scene_dicts import edited
 from ..mechanics import kepler as el
 from .scene import FORMULATIONS, with_formulation
 
@@ -87,15 +88,12 @@ def check_twin(scene: Scene, twin: str | None = None) -> CheckReport:
     twin = twin or orbit.form.twin
     if twin == orbit.formulation:
         raise ValueError(f"--set twin: the scene is already {twin!r}; choose another twin")
-    data = scene.to_dict()
-    data.pop("events", None)
-    data.get("output", {}).pop("events", None)
-    own = Scene.from_dict(data)
+    own = scene.derive(drop=("events", "output.events"))
     prec = own.integrator.precision
     if twin == "precision":
         other = next_precision(prec)
-        data["integrator"] = {**data.get("integrator", {}), "precision": other.to_spec()}
-        data["integrator"]["tolerance"] = "auto"
+        changes = {"integrator.precision": other.to_spec(), "integrator.tolerance": "auto"}
+        data = edited(own.to_dict(), changes)
         what = label(other)
     else:
         data = with_formulation(own, twin)

@@ -34,6 +34,7 @@ from ..core.consistency import (
 from ..core.exact import difference, exact_array
 from ..core.precision import exact_fraction, scene_mpf
 from ..core.scene import Scene
+from ..core.scene_dicts import edited
 from .attitude import quaternion_multiply
 from .scene import with_formulation
 
@@ -143,9 +144,7 @@ def check_closed_form(scene: Scene, times: int | None = None) -> CheckReport:
 
     if not scene.model.torque_free:
         raise ValueError("scene: the closed form is that of a torque-free body; it has forces")
-    data = scene.to_dict()
-    data.pop("events", None)
-    scene = Scene.from_dict(data)
+    scene = scene.derive(drop=("events",))
     closed = closed_form(scene)
     result = run(scene)
     prec = scene.integrator.precision
@@ -284,10 +283,7 @@ def check_twin(scene: Scene, why: str = "") -> CheckReport:
         raise ValueError(
             f"scene: the twin check needs an attitude (formulation {form.name!r} has none)"
         )
-    data = scene.to_dict()
-    data.pop("events", None)
-    data.get("output", {}).pop("events", None)
-    own = Scene.from_dict(data)
+    own = scene.derive(drop=("events", "output.events"))
     a, b = run(own), run(Scene.from_dict(with_formulation(own, other)))
     cert = difference_certificate(a, b)
     prec = own.integrator.precision
@@ -325,22 +321,17 @@ def _check_poisson_twin(scene: Scene, why: str) -> CheckReport:
     from ..core.engine import run
     from .poisson import GAMMA, direction
 
-    data = scene.to_dict()
-    data.pop("events", None)
-    data.get("output", {}).pop("events", None)
-    data.pop("monitors", None)
-    data.get("output", {}).pop("monitors", None)
-    own = Scene.from_dict(data)
+    own = scene.derive(drop=("events", "output.events", "monitors", "output.monitors"))
     prec = own.integrator.precision
     u = [str(x) for x in direction(own.model.forces, prec)]
-    twin = with_formulation(own, "quaternion", more=True)
-    twin["monitors"] = {
+    gamma = {
         name: {
             "expression": " + ".join(f"({_MATRIX[i][j]})*({u[i]})" for i in range(3)),
             "conserved": False,
         }
         for j, name in enumerate(GAMMA)
     }
+    twin = edited(with_formulation(own, "quaternion", more=True), {"monitors": gamma})
     a, b = run(own), run(Scene.from_dict(twin))
     attitude = [n for n in (*_QUATERNION, *LAMBDA) if n in a.variables]
     errors = {n: difference(a[n], b[n]) for n in ("p", "q", "r", *GAMMA, *attitude)}
@@ -387,12 +378,13 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     from ..core.precision import Precision
     from ..core.structures import model_for
 
-    data = with_formulation(scene, "quaternion", more=True)
-    data["integrator"] = {"precision": "double"}
     # Only the start is the twin's own (the span is given): times that are distinct in the
     # scene's precision but not in double must not refuse the check.
-    data["output"] = {**data["output"], "times": [repr(float(scene.time_grid[0]))]}
-    twin = Scene.from_dict(data)
+    start = [repr(float(scene.time_grid[0]))]
+    data = with_formulation(scene, "quaternion", more=True)
+    twin = Scene.from_dict(
+        edited(data, {"integrator": {"precision": "double"}, "output.times": start})
+    )
     model = model_for(twin)
     prec = Precision("double")
     names = [str(v) for v, _ in model.system]

@@ -280,12 +280,9 @@ def check_element_equations(
             times += [ends[i]] + [ends[i] + half * (1 + mpmath.mpf(x)) for x in gl_x]
         times.append(ends[-1])
         texts = [mpmath.nstr(x, prec.dps + 5) for x in times]
-    data = scene.to_dict()
-    data.pop("events", None)
-    data["output"] = {"times": texts}
     from ..core.engine import run
 
-    result = run(Scene.from_dict(data))
+    result = run(scene.derive({"output": {"times": texts}}, drop=("events",)))
     samples_data = _sample_along(result, inertia, upsilon0, forces, prec)
     eps_run = (
         float(scene.integrator.tolerance)

@@ -401,10 +401,7 @@ def _window(
 
 
 def _over(scene: Scene, times: list[Number], max_steps: int) -> Scene:
-    data = scene.to_dict()
-    data["output"] = {**data.get("output", {}), "times": times}
-    data["integrator"] = {**data.get("integrator", {}), "max_steps": max_steps}
-    return Scene.from_dict(data)
+    return scene.derive({"output.times": times, "integrator.max_steps": max_steps})
 
 
 def _pilot(scene: Scene, family: Family, formulation: str | None, span: float) -> list[Route]:

@@ -44,7 +44,8 @@ from ..core.precision import (
     scene_mpf,
     shown,
 )
-from ..core.scene import Scene, check_keys, checked_numbers, number, plain_copy, read_toml
+from ..core.scene import Scene, check_keys, checked_numbers, number, read_toml
+from ..core.scene_dicts import plain_copy
 
 KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")
