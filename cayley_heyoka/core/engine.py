@@ -375,8 +375,10 @@ class Propagation:
                 break
             points, outputs, resume = self._call_points(until, end)
             callback, limit = self._call_guard(left)
-            res = ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
-            ended = outcomes.Ended.of(res)
+            call = outcomes.GridRun.of(
+                ta.propagate_grid(points, callback=callback, max_steps=limit, **self._limit)
+            )
+            ended = call.ended
             stuck = (ended.zero_step or self._zero.seen) and not self._signals.received
             if self._probe.limit is not None:
                 cut = ended.outcome == hy.taylor_outcome.step_limit and limit < left and not stuck
@@ -388,7 +390,7 @@ class Propagation:
                     continue
             if isinstance(callback, HeldProgress):
                 callback.release()
-            self._record(res[-1][int(resume) : int(resume) + outputs], ended, states, pars_rows)
+            self._record(call.states[int(resume) : int(resume) + outputs], ended, states, pars_rows)
             if self._handover is not None:
                 ta = self._take_over(self._handover.variant)
                 self._settle(ta, ta.time)  # in the variant's terms (its events' expressions)

@@ -493,7 +493,8 @@ class _Lanes:
         elif len(grid) > 2:
             if self.table is None:
                 self.table = np.repeat(grid[:, None], width, axis=1)
-            out = ta.propagate_grid(self.table, max_steps=self.budget, **self.limit)[-1]
+            grid_call = ta.propagate_grid(self.table, max_steps=self.budget, **self.limit)
+            out = outcomes.batch_states(grid_call)
             res = ta.propagate_res
         else:
             out = ta.state.copy()[None, :, :]
@@ -608,7 +609,7 @@ class _Lanes:
         left = min(self.budget - m.steps for m in members.values())
         if self._cancelled():
             return
-        out = ta.propagate_grid(table, max_steps=left, **self.limit)[-1]
+        out = outcomes.batch_states(ta.propagate_grid(table, max_steps=left, **self.limit))
         results = ta.propagate_res
         if self._cancelled():
             return  # a cancel may have poisoned the call: its members stay unfinished

@@ -40,6 +40,32 @@ class Ended(NamedTuple):
         return zero_step(self.outcome, self.min_h)
 
 
+class GridRun(NamedTuple):
+    """One ``propagate_grid`` call of a scalar integrator, by name: how it ended, and the
+    states at the grid's points (one row a point; a point not reached stays NaN)."""
+
+    ended: Ended
+    states: Any
+
+    @classmethod
+    def of(cls, res: Any) -> GridRun:
+        return cls(Ended.of(res), res[-1])
+
+    def whole(self, what: str, t: Any) -> Any:
+        """The states, if the call reached its last point (its integrator at ``t``); else a
+        ``ValueError`` saying that ``what`` ended early, and how — for a check's own
+        integration, whose rows past the end would be NaN."""
+        if self.ended.outcome != hy.taylor_outcome.time_limit:
+            raise ValueError(f"{what} ended early: {other(self.ended.outcome, t)}")
+        return self.states
+
+
+def batch_states(res: Any) -> Any:
+    """The states of a batch integrator's ``propagate_grid`` call, ``(points, dim, lanes)``
+    (each lane's outcome is in the integrator's ``propagate_res``)."""
+    return res[-1]
+
+
 class EnsembleRun(NamedTuple):
     """One member of ``heyoka.ensemble_propagate_grid``, by name: the member's integrator,
     how its call ended, and the states on the grid."""

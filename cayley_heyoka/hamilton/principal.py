@@ -28,6 +28,7 @@ import heyoka as hy
 import mpmath
 import numpy as np
 
+from ..core import outcomes
 from ..core.consistency import CheckReport, CheckRow
 from ..core.exact import exact
 from ..core.precision import Precision, scene_mpf
@@ -129,7 +130,8 @@ def check_principal_function(scene: Scene) -> PrincipalCheck:
     )
     grid = scene.time_grid
     ta.time = grid[0]
-    rows = ta.propagate_grid(grid)[-1]
+    run = outcomes.GridRun.of(ta.propagate_grid(grid))
+    rows = run.whole("scene: the variational equations of the principal function", ta.time)
     size = 2 * n + 1
     jac = [ta.get_vslice(order=1, component=i) for i in range(size)]
     rates = hy.cfunc([rhs for _, rhs in model.system], [v for v, _ in model.system], **kw)

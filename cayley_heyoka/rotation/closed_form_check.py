@@ -24,6 +24,7 @@ from typing import Any
 import mpmath
 import numpy as np
 
+from ..core import outcomes
 from ..core.consistency import (
     CheckOptions,
     CheckReport,
@@ -398,7 +399,8 @@ def _variational_sensitivity(scene: Scene, span: float) -> dict[str, float]:
     t0 = float(twin.time_grid[0])
     ta.time = t0
     grid = [t0 + span * k / _SENSITIVITY_TIMES for k in range(_SENSITIVITY_TIMES + 1)]
-    states = ta.propagate_grid(grid)[-1]
+    run = outcomes.GridRun.of(ta.propagate_grid(grid))
+    states = run.whole("scene: the twin's variational equations (its sensitivity)", ta.time)
     rates = [names.index(n) for n in "pqr"]
     quaternion = [names.index(n) for n in ("qw", "qx", "qy", "qz")]
     w0 = np.asarray(model.initial_state, dtype=float)[rates]

@@ -94,3 +94,15 @@ def test_principal_function_of_relative_motion():
     check = check_principal_function(Scene.from_dict(d))
     assert np.all(np.isfinite(check.condition[1:]))
     assert_within(check, EPS["double"], scale=check.scale)
+
+
+def test_variational_equations_that_end_early_are_refused_not_read_as_rows():
+    """A radial fall H = ϖ²/2 − 1/η reaches η = 0 near t = 1.11: the variational run ends
+    there, and the check says so instead of reading the grid's unreached rows (NaN)."""
+    d = {
+        "hamiltonian": {"H": "varpi1**2/2 - 1/eta1"},
+        "initial": {"eta": ["1"], "varpi": ["0"]},
+        "output": {"times": {"start": "0", "stop": "3", "count": 4}},
+    }
+    with pytest.raises(ValueError, match="variational equations of the principal function ended"):
+        check_principal_function(Scene.from_dict(d))
