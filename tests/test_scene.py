@@ -301,3 +301,28 @@ def test_a_path_through_a_value_is_refused_by_name():
     scene = Scene.from_dict(free_body()).derive({"integrator.max_steps": 5})
     with pytest.raises(SceneError, match=r"integrator.max_steps: must be a table to set"):
         scene.derive({"integrator.max_steps.deeper": 1})
+
+
+@pytest.mark.parametrize(
+    ("path", "field", "words"),
+    [
+        ("initial.rates[7]", "initial.rates[7]", "out of range"),
+        ("initial.rates.x", "initial.rates", "is a list"),
+        ("initial.rates[0][1]", "initial.rates[0]", "must be a table"),
+        ("title.x", "title", "must be a table"),
+        ("initial..rates", "initial..rates", "dotted scene path"),
+    ],
+)
+def test_a_derived_path_that_does_not_fit_the_scene_is_refused_by_name(path, field, words):
+    scene = Scene.from_dict(free_body(title="t"))
+    with pytest.raises(SceneError, match=words) as caught:
+        scene.derive({path: "1"})
+    assert caught.value.field == field
+
+
+def test_a_derived_index_sets_one_entry_and_leaves_the_source_scene_alone():
+    scene = Scene.from_dict(free_body())
+    rates = list(scene.to_dict()["initial"]["rates"])
+    derived = scene.derive({"initial.rates[1]": "0.125"})
+    assert derived.to_dict()["initial"]["rates"] == [rates[0], "0.125", rates[2]]
+    assert scene.to_dict()["initial"]["rates"] == rates

@@ -1,10 +1,12 @@
 """A scene's dictionary (the TOML document's shape): copied into plain types
-(:func:`plain_copy`, what a scene keeps of its source) and edited by dotted paths
-(:func:`edited`, for :meth:`.Scene.derive`)."""
+(:func:`plain_copy`, what a scene keeps of its source) and edited at scene paths such as
+``initial.rates[0]`` (:func:`edited` for :meth:`.Scene.derive`, :func:`set_at` for a sweep's
+members)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import re
+from collections.abc import Iterable, Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -13,42 +15,110 @@ import numpy as np
 from .errors import SceneError
 from .precision import as_number
 
-__all__ = ["edited", "plain_copy"]
+__all__ = ["Path", "edited", "parse_path", "plain_copy", "set_at", "show_path"]
+
+
+#: One segment of a scene path: a key, then any indices (``rates[0]``).
+_SEGMENT = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)")
+
+Path = tuple[str | int, ...]
+
+
+def parse_path(name: str, where: str) -> Path:
+    """The keys and indices of a dotted scene path with optional indices.
+
+    Raises
+    ------
+    SceneError
+        ``where``: ``name`` is not such a path.
+
+    Examples
+    --------
+    >>> parse_path("initial.rates[0]", "sweep.parameters")
+    ('initial', 'rates', 0)
+    """
+    path: list[str | int] = []
+    for segment in name.split("."):
+        m = _SEGMENT.fullmatch(segment)
+        if m is None:
+            raise SceneError(
+                where, 'must be a dotted scene path with optional indices, like "initial.rates[0]"'
+            )
+        path.append(m[1])
+        path += [int(i) for i in re.findall(r"\[(\d+)\]", m[2])]
+    return tuple(path)
+
+
+def show_path(path: Sequence[str | int]) -> str:
+    """A parsed path written back (``initial.rates[0]``)."""
+    text = ""
+    for key in path:
+        text += f"[{key}]" if isinstance(key, int) else (f".{key}" if text else key)
+    return text
+
+
+def set_at(data: dict[str, Any], path: Path, value: Any) -> None:
+    """Set ``value`` at ``path`` in ``data``, copying each table and list on the way (``data``
+    itself is the caller's copy; what it shares with others is left as it was), a table
+    the path names and ``data`` lacks added.
+
+    Raises
+    ------
+    SceneError
+        The path runs through a number or text, or indexes a list beyond its end.
+    """
+    node: Any = data
+    for depth, key in enumerate(path[:-1]):
+        child = node[key] if isinstance(key, int) else node.get(key, {})
+        if not isinstance(child, Mapping | list | tuple):
+            where = show_path(path[: depth + 1])
+            raise SceneError(where, f"must be a table to set {show_path(path)}, got {child!r}")
+        child = list(child) if isinstance(child, list | tuple) else dict(child)
+        node[key] = child
+        index = path[depth + 1]
+        if isinstance(index, int):
+            if not isinstance(child, list):
+                raise SceneError(show_path(path[: depth + 1]), "is not a list: it takes no index")
+            if index >= len(child):
+                where = show_path(path[: depth + 2])
+                raise SceneError(where, f"is out of range: the list has {len(child)} entries")
+        elif isinstance(child, list):
+            where = show_path(path[: depth + 1])
+            raise SceneError(where, f"is a list: name an entry, like {where}[0]")
+        node = child
+    node[path[-1]] = value
 
 
 def edited(
     data: dict[str, Any], changes: Mapping[str, Any], drop: Iterable[str] = ()
 ) -> dict[str, Any]:
-    """``data`` (a scene's dictionary, changed in place and returned) with the dotted paths of
-    ``drop`` removed where present and those of ``changes`` set (:meth:`Scene.derive`).
+    """``data`` (a scene's dictionary, changed and returned; the tables and lists on the way
+    to a change copied, the rest shared) with the paths of ``drop`` removed where present and
+    those of ``changes`` set (:meth:`.Scene.derive`); a path is dotted keys with optional
+    indices (:func:`parse_path`).
 
     Raises
     ------
     SceneError
-        A path through something that is not a table.
+        A path that is not one, or runs through a number or text.
 
     Examples
     --------
     >>> edited({"integrator": {"tolerance": "1e-12"}, "events": {}}, {"integrator.max_steps": 9},
     ...        drop=["events"])
     {'integrator': {'tolerance': '1e-12', 'max_steps': 9}}
+    >>> edited({"initial": {"rates": [1, 2, 3]}}, {"initial.rates[1]": "0.5"})
+    {'initial': {'rates': [1, '0.5', 3]}}
     """
-    for path in drop:
-        *tables, key = path.split(".")
+    for name in drop:
+        *tables, key = name.split(".")
         node: Any = data
         for table in tables:
             node = node.get(table) if isinstance(node, dict) else None
         if isinstance(node, dict):
             node.pop(key, None)
-    for path, value in changes.items():
-        *tables, key = path.split(".")
-        node = data
-        for depth, table in enumerate(tables):
-            node = node.setdefault(table, {})
-            if not isinstance(node, dict):
-                where = ".".join(tables[: depth + 1])
-                raise SceneError(where, f"must be a table to set {path}, got {node!r}")
-        node[key] = value
+    for name, value in changes.items():
+        set_at(data, parse_path(name, name), value)
     return data
 
 

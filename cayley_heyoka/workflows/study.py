@@ -25,7 +25,6 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -45,7 +44,7 @@ from ..core.precision import (
     shown,
 )
 from ..core.scene import Scene, check_keys, checked_numbers, number, read_toml
-from ..core.scene_dicts import plain_copy
+from ..core.scene_dicts import parse_path, plain_copy, set_at, show_path
 
 KINDS = ("grid", "random")
 BACKENDS = ("local", "dask")
@@ -61,7 +60,6 @@ DEFAULT_CHUNK = 256
 #: (10¹² members once took all memory, or a minute, just to list them).
 MAX_MEMBERS = 10**6
 
-_SEGMENT = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)")
 
 #: A member: its index and the values of the swept parameters.
 Member = tuple[int, tuple[Number, ...]]
@@ -301,7 +299,7 @@ class Study:
         changes: :meth:`Scene.from_dict` copies what it keeps)."""
         data = dict(self.scene)
         for p, value in zip(self.parameters, values, strict=True):
-            _substitute(data, p.path, value)
+            set_at(data, p.path, value)
         return data
 
     def member_scene(self, index: int, values: Sequence[Number]) -> Scene:
@@ -378,7 +376,7 @@ def _parameter(
     name: str, spec: Any, kind: str, scene: Mapping[str, Any], prec: Precision
 ) -> Parameter:
     where = f'sweep.parameters."{name}"'
-    path = _parse_path(name, where)
+    path = parse_path(name, where)
     if path[0] == "output":
         raise SceneError(
             where,
@@ -467,25 +465,12 @@ def _decimal(value: Fraction, prec: Precision) -> str:
     return exact if exact is not None else fraction_text(value, prec)
 
 
-def _parse_path(name: str, where: str) -> tuple[str | int, ...]:
-    path: list[str | int] = []
-    for segment in name.split("."):
-        m = _SEGMENT.fullmatch(segment)
-        if m is None:
-            raise SceneError(
-                where, 'must be a dotted scene path with optional indices, like "initial.rates[0]"'
-            )
-        path.append(m[1])
-        path += [int(i) for i in re.findall(r"\[(\d+)\]", m[2])]
-    return tuple(path)
-
-
 def _check_target(scene: Mapping[str, Any], path: tuple, name: str, where: str) -> None:
     """The path must lead to one number; keys the base scene leaves out may be added (the
     member scenes' validation checks their names), lists must exist to be indexed."""
     node: Any = scene
     for depth, key in enumerate(path):
-        here = _show_path(path[:depth]) or "the scene"
+        here = show_path(path[:depth]) or "the scene"
         if isinstance(key, int):
             if not isinstance(node, list):
                 raise SceneError(where, f"{here} is not a list: it cannot take the index [{key}]")
@@ -500,7 +485,7 @@ def _check_target(scene: Mapping[str, Any], path: tuple, name: str, where: str) 
         if key not in node:
             if any(isinstance(k, int) for k in path[depth:]):
                 raise SceneError(
-                    where, f"{_show_path(path[: depth + 1])} is not in the scene: no list to index"
+                    where, f"{show_path(path[: depth + 1])} is not in the scene: no list to index"
                 )
             return
         node = node[key]
@@ -508,25 +493,6 @@ def _check_target(scene: Mapping[str, Any], path: tuple, name: str, where: str) 
         what = "a table" if isinstance(node, Mapping) else "a list"
         hint = f'; name one entry, like "{name}[0]"' if isinstance(node, list) else ""
         raise SceneError(where, f"names {what}, not a number{hint}")
-
-
-def _substitute(data: dict[str, Any], path: tuple, value: Number) -> None:
-    """Set ``value`` at ``path`` in ``data``, copying each table and list on the way (``data``
-    itself is the caller's copy)."""
-    node: Any = data
-    for key in path[:-1]:
-        child = node[key] if isinstance(key, int) else node.get(key, {})
-        child = list(child) if isinstance(child, list | tuple) else dict(child)
-        node[key] = child
-        node = child
-    node[path[-1]] = value
-
-
-def _show_path(path: Sequence[str | int]) -> str:
-    text = ""
-    for key in path:
-        text += f"[{key}]" if isinstance(key, int) else (f".{key}" if text else key)
-    return text
 
 
 def show_number(value: Any) -> str:
