@@ -11,6 +11,7 @@ import importlib
 import time
 from pathlib import Path
 
+import users_common
 from users_common import Row, table
 
 HERE = Path(__file__).resolve().parent
@@ -45,4 +46,6 @@ def run(quick: bool, figures: Path) -> str:
     ]
     if missing:
         lines += ["", f"Not measured (no script): {', '.join(missing)}."]
+    if users_common.SKIPPED:
+        lines += ["", f"Not measured here: {'; '.join(users_common.SKIPPED)}."]
     return "\n".join(lines)

@@ -55,6 +55,11 @@ class Row:
         return None if self.target is None else self.median <= self.target
 
 
+#: Rows a script could not measure on this machine, and why (said under the section's table,
+#: so that a missing row is never mistaken for one removed).
+SKIPPED: list[str] = []
+
+
 def interleaved(
     ours: Callable[[], object],
     floor: Callable[[], object],

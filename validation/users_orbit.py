@@ -183,6 +183,9 @@ def _bare_step_ratio(cayley: ch.Scene, cartesian: ch.Scene, steps: int, repeats:
 def against_ias15(quick: bool) -> list[Row]:
     """Rows 3a–c: our formulations against IAS15 over the same grid (``bench_ias15``)."""
     if not (available("rebound") and available("reboundx")):
+        why = 'the IAS15 rows: REBOUND and REBOUNDx are not installed (pip install -e ".[bench]")'
+        users_common.SKIPPED.append(why)
+        print(f"not measured: {why}", file=sys.stderr)
         return []
     n = bench_ias15.N_QUICK if quick else bench_ias15.N_FULL
     times = bench_ias15.grid(n)
