@@ -5,7 +5,9 @@ Rows (issue 16's table, each ours ÷ its floor, timed interleaved in one process
 * ``run()`` of a short span (about 10 steps) of a bundled scene without events, its integrator
   already compiled — against heyoka alone doing the same work with the integrator kept: a
   reset of its time and state and ``propagate_until`` (the bundled free body in Rodrigues
-  parameters, and in a quaternion);
+  parameters, and in a quaternion); beside each, a diagnostic (not judged): that floor doing
+  also what a run gives — the states on the output grid, the compiled outputs there and their
+  finiteness — against the bare floor;
 * ``run_sweep`` of a conservation study of free bodies (the bundled random study, its member
   count raised) — against a hand-written heyoka batch integrator of the same equations looping
   over the members, recording the same output times, on as many threads as the sweep's
@@ -88,7 +90,39 @@ def short_runs(quick: bool) -> list[Row]:
                 f"floor {raw * 1e6:.0f} µs",
             )
         )
+        rows.append(_with_outputs(scene, prop, kept, x0, floor, quick))
     return rows
+
+
+def _with_outputs(scene: ch.Scene, prop: Any, ta: Any, x0: np.ndarray, floor, quick) -> Row:
+    """A diagnostic beside a short run's row: the floor that also gives what a ``run()``
+    gives — the states on the output grid (``propagate_grid``), the compiled outputs and
+    monitors evaluated there, their finiteness checked — against the bare floor. What
+    ``run()`` costs beyond it is the engine's own work (checks, signals, the ``Result``)."""
+    evaluator = prop.compiled.evaluator
+    grid = np.asarray(scene.time_grid, dtype=float)
+    held = evaluator.nparams
+    pars = np.asarray(prop.model.pars.values[:held], dtype=float)
+    columns = np.repeat(pars[:, None], len(grid), axis=1) if held else None
+
+    def outputs() -> None:
+        ta.time = float(grid[0])
+        ta.state[:] = x0
+        states = ta.propagate_grid(grid)[-1]
+        kwargs = {"time": grid} if columns is None else {"time": grid, "pars": columns}
+        values = evaluator(np.ascontiguousarray(states.T), **kwargs)
+        if not np.isfinite(values).all():
+            raise RuntimeError("the short run's outputs are not finite")
+
+    ratios, with_outputs, raw = interleaved(outputs, floor, repeats=5 if quick else 15, inner=50)
+    return Row(
+        f"the same span, the floor with the run's outputs (diagnostic, {len(grid)} output times)",
+        ratios,
+        None,
+        "the kept integrator: state reset + `propagate_until`",
+        f"reset + `propagate_grid` + the compiled outputs and their finiteness: "
+        f"{with_outputs * 1e6:.0f} µs against {raw * 1e6:.0f} µs",
+    )
 
 
 def _hand_written_batch(width: int) -> hy.taylor_adaptive_batch:
