@@ -45,7 +45,7 @@ from .recording import (
     start_values,
 )
 from .result import Result, versions
-from .row_pars import RowPars
+from .row_pars import Rows
 from .scene import Scene, check_units, require_scene
 from .signals import WORKER, DeferredSignals, held_signals
 from .span_probe import SpanProbe
@@ -233,17 +233,13 @@ class Propagation:
         if scene.integrator.max_step is not None:
             self._limit["max_delta_t"] = prec.number(scene.integrator.max_step)
         self._keep = keep
-        self._states: list[np.ndarray] = []
-        self._pars_rows: list[np.ndarray] = []
+        # The rows kept, the parameters each was computed with, the current call's schedule.
+        self._rows = Rows()
         self.terminal = own_terminal(model.terminal)
         self.counters = {"steps": 0, **{spec.counter: 0 for spec in model.terminal}}
         self.status, self.message = 0, "every output time was reached"
         # Occurrences of recorded events logged by terminal events that stand for them.
         self._logged: list[tuple] = []
-        # The current call's output rows and the parameters each is computed with.
-        self._row_pars = RowPars(self.grid[:0])
-        #: Output times recorded so far.
-        self.done = 0
         self._probe = SpanProbe(scene, self.grid[0])
         self._scene_record = held
         if held.probed:
@@ -253,6 +249,11 @@ class Propagation:
     def time(self) -> Any:
         """The integrator's current time."""
         return self._ta.time
+
+    @property
+    def done(self) -> int:
+        """Output times recorded so far."""
+        return self._rows.done
 
     @property
     def finished(self) -> bool:
@@ -276,34 +277,30 @@ class Propagation:
         if until is None:
             until = grid[-1]
         end = int(np.searchsorted(grid, until, side="right"))
-        states: list[np.ndarray] = []
-        pars_rows: list[np.ndarray] = []
+        first = len(self._rows.states)
         budget = self.scene.integrator.max_steps
         try:
             with self._signals, quiet_heyoka():
                 self._poisoning = self._signals.active and self._can_poison()
                 if not self._poisoning:
-                    self._propagate(until, end, budget, states, pars_rows)
+                    self._propagate(until, end, budget)
                 else:
                     if self._probe.limit is not None:
                         # The first call takes at most PROBES[0] steps (µs in double): here,
                         # without a thread; a run that needs no more ends with it.
-                        self._propagate(until, end, budget, states, pars_rows, calls=1)
+                        self._propagate(until, end, budget, calls=1)
                     if self.status == 0 and (self.done < end or self._ta.time < until):
                         WORKER.run(
-                            lambda: self._propagate(until, end, budget, states, pars_rows),
+                            lambda: self._propagate(until, end, budget),
                             self._stop_stepping,
                             self._stop_harder,
                         )
         finally:
             if self._poisoning and self._ta is not None:
                 self._ta.pars[:] = self._pars[: self._held]  # a signal may have poisoned them
-            width = (len(model.system), len(model.pars))
-            state = np.concatenate(states) if states else np.empty((0, width[0]))
-            pars = np.concatenate(pars_rows) if pars_rows else np.empty((0, width[1]))
-            if self._keep:
-                self._states.append(state)
-                self._pars_rows.append(pars)
+            state, pars = self._rows.joined(first, (len(model.system), len(model.pars)))
+            if not self._keep:
+                self._rows.forget(first)
         return state, pars
 
     def _can_poison(self) -> bool:
@@ -347,13 +344,10 @@ class Propagation:
         until: Any,
         end: int,
         budget: int,
-        states: list,
-        pars_rows: list,
         calls: int | None = None,
     ) -> None:
         """heyoka's calls up to ``until`` (the output times before ``end``), each call's rows
-        appended to ``states`` and ``pars_rows``; at most ``calls`` calls (None: as many as
-        it takes).
+        kept (:class:`.row_pars.Rows`); at most ``calls`` calls (None: as many as it takes).
 
         Outputs come from heyoka's dense output: only the last point of a ``propagate_grid``
         call ends a step there. One call covers every output time up to ``until``: terminal
@@ -390,7 +384,7 @@ class Propagation:
                     continue
             if isinstance(callback, HeldProgress):
                 callback.release()
-            self._record(call.states[int(resume) : int(resume) + outputs], ended, states, pars_rows)
+            self._record(call.states[int(resume) : int(resume) + outputs], ended)
             if self._handover is not None:
                 ta = self._take_over(self._handover.variant)
                 self._settle(ta, ta.time)  # in the variant's terms (its events' expressions)
@@ -424,7 +418,7 @@ class Propagation:
         resume = self._ta.time != points[0]
         if resume:
             points = _starting_at(prec, self._ta.time, points)
-        self._row_pars = RowPars(grid[i : i + outputs])
+        self._rows.begin(grid[i : i + outputs])
         return points, outputs, resume
 
     def _call_guard(self, left: int) -> tuple[Callable[[Any], bool] | None, int]:
@@ -443,14 +437,10 @@ class Propagation:
             callback = HeldProgress(callback)
         return callback, left if probe is None else min(left, probe)
 
-    def _record(
-        self, out: np.ndarray, ended: outcomes.Ended, states: list, pars_rows: list
-    ) -> None:
+    def _record(self, out: np.ndarray, ended: outcomes.Ended) -> None:
         """Keep a call's output rows, each with the parameters in force when it was computed."""
         self.counters["steps"] += ended.steps
-        states.append(out)
-        pars_rows.append(self._row_pars.take(len(out), self._pars))
-        self.done += len(out)
+        self._rows.keep(out, self._pars)
 
     def _goes_on(self, ended: outcomes.Ended, stuck: bool, budget: int) -> bool:
         """After a call: whether the run goes on, or else why it stopped (status, message)."""
@@ -593,7 +583,7 @@ class Propagation:
         if self._signals.received:
             return False  # the parameters may hold a signal's poison: stop, reported after
         t = ta.time
-        self._row_pars.passing(ta.dtime, self._pars)
+        self._rows.passing(ta.dtime, self._pars)
         spec = self.terminal[index]
         stop = call_handler(spec, ta, self._pars, t)
         self._ta_pars[:] = self._pars[: self._held]
@@ -672,7 +662,7 @@ class Propagation:
             self._take_over(variant)
         prec, ta = self.precision, self._ta
         self._probe.done()  # its first steps were taken (and the span estimated) before
-        self.done = int(snapshot["done"])
+        self._rows.done = int(snapshot["done"])
         hi, lo = prec.from_text(snapshot["time"])
         ta.dtime = (hi, lo)
         ta.state[:] = prec.from_text(snapshot["state"])
@@ -709,9 +699,7 @@ class Propagation:
         """The result of what has been recorded (``states``/``pars``: every row, if not kept)."""
         model, prec = self.model, self.precision
         if states is None:
-            width = (len(model.system), len(model.pars))
-            states = np.concatenate(self._states) if self._states else np.empty((0, width[0]))
-            pars = np.concatenate(self._pars_rows) if self._pars_rows else np.empty((0, width[1]))
+            states, pars = self._rows.joined(0, (len(model.system), len(model.pars)))
         elif pars is None:
             raise ValueError("result(states, pars): the rows' parameters go with their states")
         times = self.grid[: len(states)]

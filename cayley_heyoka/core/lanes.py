@@ -46,7 +46,7 @@ from .event_parity import EventParity
 from .model import Handover, Model, TerminalSpec, call_handler, own_terminal
 from .precision import Precision
 from .result import EventLog
-from .row_pars import RowPars
+from .row_pars import Rows
 from .scene import IntegratorOptions
 from .signals import Cancel
 
@@ -106,7 +106,8 @@ class _Everything:
                 states = out[:, :, j].copy()
             else:  # terminal handlers: their tallies, parameters per row, rows kept
                 m = members[j]
-                counters, own, states = m.counters, _joined(m.pars_rows), _joined(m.states)
+                dims = (len(self.model.system), len(self.model.pars))
+                counters, (states, own) = m.counters, m.rows.joined(0, dims)
             self.results[index] = LaneResult(
                 states,
                 own,
@@ -377,22 +378,20 @@ class _LaneView:
 class _Member:
     """A lane's member and where it stands in the engine's schedule of calls.
 
-    ``row_pars`` holds the output times the lane's current call may record and the
-    parameters each is computed with (:class:`~.row_pars.RowPars`, as in the scalar engine).
+    ``rows`` are the rows it has kept, with the parameters each was computed with where its
+    handlers change them, and its current call's schedule (:class:`~.row_pars.Rows`, the
+    scalar engine's record).
     """
 
     index: int
     pars: np.ndarray
     terminal: list[TerminalSpec] = field(default_factory=list)
     stopped_at: tuple | None = None
-    done: int = 0
     steps: int = 0
-    row_pars: RowPars | None = None
+    rows: Rows = field(default_factory=Rows)
     counters: dict[str, int] = field(default_factory=dict)
     status: int = 0
     message: str = "every output time was reached"
-    states: list[np.ndarray] = field(default_factory=list)
-    pars_rows: list[np.ndarray] = field(default_factory=list)
     event_times: list[list[float]] = field(default_factory=list)
     event_directions: list[list[int]] = field(default_factory=list)
     time: float = 0.0
@@ -444,6 +443,7 @@ class _Lanes:
         """Member ``index`` at its start: its parameters, its own terminal handlers."""
         specs = own_terminal(self.terminal[index])
         m = _Member(index, np.array(self.pars[index], dtype=float), specs)
+        m.rows = Rows(with_pars=bool(specs))  # handlers change the parameters row by row
         m.counters = {"steps": 0, **{spec.counter: 0 for spec in specs}}
         m.event_times = [[] for _ in self.model.events]
         m.event_directions = [[] for _ in self.model.events]
@@ -469,7 +469,7 @@ class _Lanes:
         if self.model.terminal:
             members = [self._member(i) for i in block]
             for m in members:
-                m.row_pars = RowPars(grid)
+                m.rows.begin(grid)
             self.lanes = [*members, *[None] * (width - len(block))]
             self.twins = [None] * len(block) + [
                 self._twin(members[-1]) for _ in range(width - len(block))
@@ -510,7 +510,7 @@ class _Lanes:
         if members is not None:
             for j, m in enumerate(members):
                 m.counters["steps"] = ended[j].steps
-                self._keep(m, out[:, :, j].copy())
+                m.rows.keep(out[:, :, j].copy(), m.pars)
                 self._gather(j, m)
                 if m.parity is not None:
                     m.parity.finish(m.crossings())
@@ -563,18 +563,18 @@ class _Lanes:
         """A call of one point at the lane's current time takes no step: recorded here."""
         last = len(self.grid) - 1
         while (m := self.lanes[j]) is not None:
-            if m.status != 0 or m.done > last:
+            if m.status != 0 or m.rows.done > last:
                 self._finish(j, m)
                 continue
-            if m.done == last and self.ta.time[j] == self.grid[last]:
-                self._keep(m, self.ta.state[:, j].copy()[None, :])
+            if m.rows.done == last and self.ta.time[j] == self.grid[last]:
+                m.rows.keep(self.ta.state[:, j].copy()[None, :], m.pars)
                 continue
             return
 
     def _column(self, j: int, m: _Member) -> tuple[np.ndarray, int]:
         """Lane ``j``'s points for this call, and how many lead the outputs (the current
         time, if it is not the first output)."""
-        points = self.grid[m.done :]
+        points = self.grid[m.rows.done :]
         t = self.ta.time[j]
         if t != points[0]:
             return np.concatenate(([t], points)), 1
@@ -587,7 +587,7 @@ class _Lanes:
         columns = {j: self._column(j, m) for j, m in members.items()}
         for j, m in members.items():
             points, lead = columns[j]
-            m.row_pars = RowPars(points[lead:])
+            m.rows.begin(points[lead:])
         length = max(len(c) for c, _ in columns.values())
         # Idle lanes follow a busy one (a copy of its time, state, parameters and handlers).
         source = busy[0]
@@ -646,10 +646,10 @@ class _Lanes:
         m.counters["steps"] += steps
         m.time = t
         if reached:
-            self._keep(m, out[rows[:reached]].copy())
+            m.rows.keep(out[rows[:reached]].copy(), m.pars)
         self._gather(j, m)
         code = int(outcome)
-        if m.status != 0 or (t == points[-1] and m.done == len(self.grid)):
+        if m.status != 0 or (t == points[-1] and m.rows.done == len(self.grid)):
             pass  # stopped by its handler (status set), or every output reached
         elif ended.zero_step:
             m.status, m.message = -1, outcomes.zero_step_message(self.model, t)
@@ -657,7 +657,7 @@ class _Lanes:
             self._out_of_steps(m, t)
         elif outcome == hy.taylor_outcome.err_nf_state:
             m.status, m.nonfinite = -1, True
-            when = t if np.isfinite(t) else self.grid[max(m.done - 1, 0)]
+            when = t if np.isfinite(t) else self.grid[max(m.rows.done - 1, 0)]
             m.message = outcomes.nonfinite(when)
         elif outcome in (hy.taylor_outcome.success, hy.taylor_outcome.step_limit) or code >= 0:
             pass  # another lane stopped the call, this one at the end of a whole step
@@ -677,13 +677,6 @@ class _Lanes:
             times += got_t
             directions += got_d
 
-    def _keep(self, m: _Member, rows: np.ndarray) -> None:
-        m.states.append(rows)
-        if m.terminal:  # handlers change parameters (a chart's base): one vector per row
-            schedule = m.row_pars or RowPars(self.grid[:0])
-            m.pars_rows.append(schedule.take(len(rows), m.pars))
-        m.done += len(rows)
-
     def _on_terminal(self, index: int, ta: Any, lane: int) -> bool:
         """Terminal event ``index`` of lane ``lane``, within heyoka's call: its member's
         handler on a view of the lane (:class:`_LaneView`); whether the lane goes on."""
@@ -694,8 +687,7 @@ class _Lanes:
         if m is None:
             raise RuntimeError(f"lane {lane} reached a terminal event with no member")
         t = self.hi[lane]  # heyoka's time is the high part of its double-length time
-        if m.row_pars is not None:
-            m.row_pars.passing((t, self.lo[lane]), m.pars)
+        m.rows.passing((t, self.lo[lane]), m.pars)
         spec, view = m.terminal[index], self.views[lane]
         stop = call_handler(spec, view, m.pars, t)
         view.pars[:] = m.pars[: self.held] if self.held < len(m.pars) else m.pars
@@ -726,10 +718,10 @@ class _Lanes:
         self._assign(j)
 
     def _result(self, m: _Member) -> LaneResult:
-        states = np.concatenate(m.states) if m.states else np.empty((0, self.ta.dim))
-        pars = m.pars
-        if m.terminal:
-            pars = np.concatenate(m.pars_rows) if m.pars_rows else np.empty((0, len(m.pars)))
+        if m.terminal:  # handlers change parameters (a chart's base): one vector per row
+            states, pars = m.rows.joined(0, (self.ta.dim, len(m.pars)))
+        else:
+            states, pars = m.rows.joined_states(self.ta.dim), m.pars
         if m.parity is not None:
             m.parity.finish(m.crossings())
         recorded = m.crossings()
@@ -738,11 +730,6 @@ class _Lanes:
         return LaneResult(
             states, pars, m.status, m.message, m.counters, events, m.time, m.nonfinite, m.handover
         )
-
-
-def _joined(pieces: list[np.ndarray]) -> np.ndarray:
-    """Rows kept in pieces, as one array (the one piece itself, the usual case)."""
-    return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
 
 
 def _finite_dtime(ta: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["RowPars", "rows_up_to"]
+__all__ = ["RowPars", "Rows", "rows_up_to"]
 
 
 def rows_up_to(rows: np.ndarray, hi: Any, lo: Any) -> int:
@@ -90,3 +90,73 @@ class RowPars:
             vectors += [noted] * (min(count, n) - len(vectors))
         vectors += [pars] * (n - len(vectors))
         return np.array(vectors).reshape(n, len(pars))
+
+
+_NO_ROWS = np.empty(0)
+
+
+class Rows:
+    """The output rows a run has kept — states, and (``with_pars``) the parameter vector each
+    was computed with — and its current call's :class:`RowPars`: one record for a run
+    (:class:`~.engine.Propagation`) and for each member of the batch lanes (:mod:`.lanes`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rows, pars = Rows(), np.array([1.0])
+    >>> rows.begin(np.array([0.0, 1.0]))
+    >>> rows.keep(np.zeros((2, 3)), pars)
+    >>> rows.done, rows.joined(dims=(3, 1))[1].shape
+    (2, (2, 1))
+    """
+
+    __slots__ = ("call", "done", "pars", "states", "with_pars")
+
+    def __init__(self, with_pars: bool = True) -> None:
+        self.states: list[np.ndarray] = []
+        self.pars: list[np.ndarray] = []
+        self.done = 0
+        self.call: RowPars | None = None
+        self.with_pars = with_pars
+
+    def begin(self, rows: np.ndarray) -> None:
+        """A call that may record the output times ``rows``."""
+        self.call = RowPars(rows)
+
+    def passing(self, dtime: tuple[Any, Any], pars: np.ndarray) -> None:
+        """A terminal event within the call (:meth:`RowPars.passing`)."""
+        if self.call is not None:
+            self.call.passing(dtime, pars)
+
+    def keep(self, states: np.ndarray, pars: np.ndarray) -> None:
+        """Keep the call's next rows ``states``, each with the parameters it was computed with
+        (``pars``: those in force now, for the rows no terminal event preceded)."""
+        if self.with_pars:
+            self.pars.append((self.call or RowPars(_NO_ROWS)).take(len(states), pars))
+        self.states.append(states)
+        self.done += len(states)
+
+    def joined(
+        self, start: int = 0, dims: tuple[int, int] = (0, 0)
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The rows kept from piece ``start`` on, as arrays ``(rows, dims[0])`` and their
+        parameters ``(rows, dims[1])`` (kept ``with_pars``)."""
+        if not self.with_pars:
+            raise RuntimeError("these rows were kept without their parameters")
+        return _joined(self.states[start:], dims[0]), _joined(self.pars[start:], dims[1])
+
+    def joined_states(self, width: int) -> np.ndarray:
+        """Every state kept, ``(rows, width)``."""
+        return _joined(self.states, width)
+
+    def forget(self, start: int) -> None:
+        """Drop the pieces from ``start`` on (a caller that stores them itself); ``done``
+        still counts them."""
+        del self.states[start:]
+        del self.pars[start:]
+
+
+def _joined(pieces: list[np.ndarray], width: int) -> np.ndarray:
+    if not pieces:
+        return np.empty((0, width))
+    return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
