@@ -493,8 +493,9 @@ class _Lanes:
         elif len(grid) > 2:
             if self.table is None:
                 self.table = np.repeat(grid[:, None], width, axis=1)
-            grid_call = ta.propagate_grid(self.table, max_steps=self.budget, **self.limit)
-            out = outcomes.batch_states(grid_call)
+            out = outcomes.batch_states(
+                ta.propagate_grid(self.table, max_steps=self.budget, **self.limit)
+            )
             res = ta.propagate_res
         else:
             out = ta.state.copy()[None, :, :]

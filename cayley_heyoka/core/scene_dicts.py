@@ -18,8 +18,13 @@ from .precision import as_number
 __all__ = ["Path", "edited", "parse_path", "plain_copy", "set_at", "show_path"]
 
 
-#: One segment of a scene path: a key, then any indices (``rates[0]``).
-_SEGMENT = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)")
+#: One segment of a scene path: a key, then any indices (``rates[0]``), each index at most
+#: 18 digits (a scene's lists are short; int() of a long digit string would be refused by
+#: Python itself, or be slow).
+_SEGMENT = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d{1,18}\])*)")
+
+#: The longest scene path taken (a path names a field; a refusal quotes it).
+MAX_PATH_CHARS = 256
 
 Path = tuple[str | int, ...]
 
@@ -37,6 +42,10 @@ def parse_path(name: str, where: str) -> Path:
     >>> parse_path("initial.rates[0]", "sweep.parameters")
     ('initial', 'rates', 0)
     """
+    if not isinstance(name, str):
+        raise SceneError(where, f"must be a scene path as text, got {type(name).__name__}")
+    if len(name) > MAX_PATH_CHARS:
+        raise SceneError(where, f"is a path of {len(name)} characters, over {MAX_PATH_CHARS}")
     path: list[str | int] = []
     for segment in name.split("."):
         m = _SEGMENT.fullmatch(segment)
@@ -100,7 +109,9 @@ def edited(
     Raises
     ------
     SceneError
-        A path that is not one, or runs through a number or text.
+        ``changes`` not a table or ``drop`` not a list of paths; a path that is not one
+        (named, or as ``changes`` / ``drop`` when it is not short text), runs through a
+        number, text or a list, or indexes beyond a list's end; a list entry dropped.
 
     Examples
     --------
@@ -110,16 +121,30 @@ def edited(
     >>> edited({"initial": {"rates": [1, 2, 3]}}, {"initial.rates[1]": "0.5"})
     {'initial': {'rates': [1, '0.5', 3]}}
     """
+    if not isinstance(changes, Mapping):
+        raise SceneError("changes", f"must be a table of paths and values, got {changes!r:.60}")
+    if isinstance(drop, str | bytes) or not isinstance(drop, Iterable):
+        raise SceneError("drop", f"must be a list of paths, got {drop!r:.60}")
     for name in drop:
-        *tables, key = name.split(".")
+        *tables, key = parse_path(name, _where(name, "drop"))
+        if isinstance(key, int):
+            raise SceneError(show_path((*tables, key)), "drop removes a key, not a list entry")
         node: Any = data
         for table in tables:
             node = node.get(table) if isinstance(node, dict) else None
         if isinstance(node, dict):
             node.pop(key, None)
     for name, value in changes.items():
-        set_at(data, parse_path(name, name), value)
+        set_at(data, parse_path(name, _where(name, "changes")), value)
     return data
+
+
+def _where(name: Any, parameter: str) -> str:
+    """How a refusal of the path ``name`` given in ``parameter`` names it: the path itself
+    when it is short text, else the parameter."""
+    if isinstance(name, str) and 0 < len(name) <= MAX_PATH_CHARS:
+        return name
+    return parameter
 
 
 def plain_copy(data: Any) -> Any:
