@@ -39,14 +39,17 @@ _EXPORTS = {
     "generate_reference": "workflows.reference",
     "read_certificate": "workflows.reference",
     "run_sweep": "workflows.sweep",
+    "load_study": "workflows.study",
+    "Study": "workflows.study",
     "plan": "workflows.planner",
     "Plan": "workflows.planner",
     "load_sweep": "workflows.sweep_result",
 }
 #: Public submodules, loaded on first use (``from cayley_heyoka import plots``).
-_MODULES = {"plots": "workflows.plots"}
+_MODULES = {"plots": "plots"}
 
 if TYPE_CHECKING:
+    from . import plots
     from .core.citation import cite
     from .core.compiler import clear_cache, compile_model
     from .core.engine import run
@@ -55,7 +58,6 @@ if TYPE_CHECKING:
     from .core.precision import Precision
     from .core.result import EventLog, Result
     from .core.scene import Scene, load_scene
-    from .workflows import plots
     from .workflows.checks import check_scene
     from .workflows.ensemble import (
         EnsembleError,
@@ -64,6 +66,7 @@ if TYPE_CHECKING:
         propagate_ensemble,
     )
     from .workflows.reference import generate_reference, read_certificate
+    from .workflows.study import Study, load_study
     from .workflows.sweep import run_sweep
     from .workflows.sweep_result import load_sweep
 
@@ -119,6 +122,7 @@ __all__ = [
     "ResultFileError",
     "Scene",
     "SceneError",
+    "Study",
     "check_scene",
     "cite",
     "clear_cache",
@@ -127,6 +131,7 @@ __all__ = [
     "generate_reference",
     "load_result",
     "load_scene",
+    "load_study",
     "load_sweep",
     "plan",
     "plots",

@@ -42,7 +42,7 @@ from .sweep_result import (
 )
 
 #: How a member was integrated (the counts by path are in the file's metadata).
-PATH_LANES = "cayley_heyoka.lanes"
+PATH_LANES = "cayley_heyoka.core.lanes"
 PATH_ENSEMBLE = "heyoka.ensemble_propagate_grid"
 PATH_RUN = "cayley_heyoka.run"
 

@@ -329,7 +329,14 @@ class Study:
 
 
 def load_study(path: str | Path) -> Study:
-    """Read and validate a study file (TOML; floats kept as their decimal text)."""
+    """Read and validate a study file (TOML; floats kept as their decimal text).
+
+    Examples
+    --------
+    >>> import cayley_heyoka as ch
+    >>> study = ch.load_study("examples/studies/free_body_grid.toml")  # doctest: +SKIP
+    >>> result = ch.run_sweep(study, out="grid.h5")  # doctest: +SKIP
+    """
     path = Path(path)
     return Study.from_dict(read_toml(path, "study"), path.parent)
 
