@@ -134,11 +134,12 @@ def summary(result: Result) -> str:
     if steps and wall - compile_s > 0:
         lines.append(f"  throughput    {steps / (wall - compile_s):,.0f} steps/s (incl. recording)")
     if result.monitors:
-        lines.append("  monitors      final relative drift (conserved) or largest value:")
+        lines.append(
+            "  monitors      largest relative drift (conserved) and when, or largest value:"
+        )
         for name, arr in result.monitors.items():
             if name in result.conserved and len(arr):
-                d = float(np.max(np.abs(result.drift(name)[-1])))
-                lines.append(f"    {name:<20} {d:.3e}")
+                lines.append(f"    {name:<20} {_drift_line(result, name)}")
             elif len(arr):
                 lines.append(f"    {name:<20} largest |value| {_sci(np.max(np.abs(arr)))}")
     for name, log in result.events.items():
@@ -146,6 +147,20 @@ def summary(result: Result) -> str:
         detail = ", ".join(f"{lab}: {c}" for lab, c in zip(labels, counts, strict=True))
         lines.append(f"  event {name:<12} {len(log)} occurrences ({detail or 'none'})")
     return "\n".join(lines)
+
+
+def _drift_line(result: Result, name: str) -> str:
+    """A conserved monitor's largest drift, when it occurred and the final one: a run whose
+    drift peaked midway ends lower than its worst."""
+    import numpy as np
+
+    value, at = result.largest_drift(name)
+    if at is None:
+        return "not finite at any output time"
+    final = float(np.max(np.abs(np.asarray(result.drift(name)[-1], dtype=float))))
+    if value == 0.0:
+        return "0 (the same value, to the last bit, at every output time)"
+    return f"{value:.3e} at t = {float(at):.6g} (final {final:.3e})"
 
 
 def variable_lines(scene: dict[str, Any], names: Iterable[str]) -> list[str]:

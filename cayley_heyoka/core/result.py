@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -123,9 +124,9 @@ class Result:
         worst = ""
         drifts = {}
         for name in self.conserved if n else ():
-            d = np.abs(np.asarray(self.drift(name), dtype=float))
-            if d.size:
-                drifts[name] = float(np.nanmax(d))
+            value, _ = self.largest_drift(name)
+            if not math.isnan(value):
+                drifts[name] = value
         if drifts:
             name = max(drifts, key=drifts.__getitem__)
             worst = f", worst drift {name} {drifts[name]:.1e}"
@@ -159,9 +160,35 @@ class Result:
 
         Scalars: ``(m(t) - m(0)) / |m(0)|``; vectors: each component's change divided by the
         initial vector's norm. Where the initial value is zero the change itself is returned.
+
+        Raises
+        ------
+        KeyError
+            ``name`` is not a monitor (the message lists the monitors).
         """
-        m = self.monitors[name]
+        m = self.monitors.get(name)
+        if m is None:
+            known = ", ".join(self.monitors) or "none"
+            what = "a variable, not a monitor" if name in self.variables else "no monitor"
+            raise KeyError(f"drift({name!r}): {what}; the monitors are: {known}")
         return relative_drift(m[None], vector=m.ndim > 1)[0]
+
+    def largest_drift(self, name: str) -> tuple[float, Any]:
+        """The largest |relative drift| of a monitor over the run (largest component of a
+        vector) and the output time where it occurs (the first, if several; NaN drifts are
+        skipped).
+
+        Examples
+        --------
+        >>> value, at = result.largest_drift("energy")  # doctest: +SKIP
+        """
+        d = np.abs(np.asarray(self.drift(name), dtype=float))
+        if d.ndim > 1:
+            d = d.max(axis=tuple(range(1, d.ndim)))
+        if not d.size or np.isnan(d).all():
+            return float("nan"), None
+        k = int(np.nanargmax(d))
+        return float(d[k]), self.t[k]
 
     def final_drifts(self) -> dict[str, float]:
         """Relative drift at the last output time of each conserved monitor (largest component)."""
