@@ -270,7 +270,9 @@ def test_run_on_a_full_disk_says_so_and_keeps_the_previous_file(
         "[output]\ntimes = [0, 1]\n"
     )
     out = tmp_path / "r.h5"
-    result.save(out)
+    # The previous file is this scene's (another scene's result is not replaced at all).
+    assert main(["run", str(scene), "--out", str(out), "--no-progress"]) == 0
+    capsys.readouterr()
     before = out.read_bytes()
 
     def full_disk(self: Result, f: h5py.File) -> None:
@@ -365,8 +367,9 @@ def test_sweep_whose_file_cannot_be_written_keeps_the_previous_one(tmp_path, cap
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
     monkeypatch.setattr(files.os, "write", full_disk)
+    # --overwrite: the file there is another study's sweep.
     argv = ["sweep", str(tmp_path / "study.toml"), "--out", str(out), "--chunk", "2"]
-    assert main([*argv, "--no-progress"]) == 1
+    assert main([*argv, "--no-progress", "--overwrite"]) == 1
     captured = capsys.readouterr()
     assert "No space left on device); nothing changed" in captured.err
     assert "4 completed" in captured.out  # what was computed is shown

@@ -125,14 +125,17 @@ def _main(argv: list[str] | None) -> int:
 OVERWRITE_HELP = "replace --out even if it is not a file of ours of the same kind"
 
 
-def destination(args: argparse.Namespace, kind: str) -> bool:
-    """Refuse ``--out`` up front (printing why) if it cannot or may not be written."""
+def destination(
+    args: argparse.Namespace, kind: str, holding: tuple[str, Any] | None = None
+) -> bool:
+    """Refuse ``--out`` up front (printing why) if it cannot or may not be written, or with
+    ``holding`` if it holds another scene's file (:func:`.core.files.check_destination`)."""
     if not args.out:
         return True
     from ..core.files import OutputError, check_destination
 
     try:
-        check_destination(args.out, kind, overwrite=args.overwrite)
+        check_destination(args.out, kind, overwrite=args.overwrite, holding=holding)
     except OutputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return False

@@ -39,6 +39,8 @@ def _run(args: argparse.Namespace) -> int:
     except SceneError as exc:
         print(f"error: {args.scene}: {exc}", file=sys.stderr)
         return 2
+    if not destination(args, "result", holding=("scene", scene.to_dict())):
+        return 2  # a result of another scene
     from ..core.engine import run  # heyoka: only once the scene is known to be good
 
     bar = None

@@ -57,6 +57,14 @@ def _sweep(args: argparse.Namespace) -> int:
     except (SceneError, OSError) as exc:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
+    try:
+        if args.out:  # a sweep of another study is not replaced without --overwrite
+            check_destination(
+                args.out, "sweep", overwrite=args.overwrite, holding=("study", study.to_dict())
+            )
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     from ..workflows.sweep import run_sweep  # heyoka: only once the study is known to be good
 
     bar = None

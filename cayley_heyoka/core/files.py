@@ -5,9 +5,10 @@ policy (docs/scenes.md, "Files"):
 
 * **Destination checked first.** Before any work, :func:`check_destination` refuses a missing
   or read-only directory, a directory given as the file, and an existing file that is not one
-  of ours of the same kind (unless ``overwrite``). A result file of ours is replaced: running
-  the same command again is the usual way to redo a run, and the old file survives until the
-  new one is complete.
+  of ours of the same kind (unless ``overwrite``), or, for a caller that says what the file
+  will hold (``holding``), one that holds another scene or study. A result file of ours of the
+  same scene is replaced: running the same command again is the usual way to redo a run, and
+  the old file survives until the new one is complete.
 * **Atomic.** :func:`write_bytes` is the one writer: it writes ``.NAME.tmp-PID`` beside the
   file (created afresh: processes never share one), flushes it to disk and renames it over
   the file, so a process killed at any moment leaves the previous file or the new one, never
@@ -109,7 +110,13 @@ class WriteFailed(OutputError):
 
 
 # ---------------------------------------------------------------------- destinations
-def check_destination(path: str | Path, kind: str, *, overwrite: bool = False) -> None:
+def check_destination(
+    path: str | Path,
+    kind: str,
+    *,
+    overwrite: bool = False,
+    holding: tuple[str, Any] | None = None,
+) -> None:
     """Refuse, before any work, a destination that cannot or may not be written.
 
     Parameters
@@ -121,22 +128,30 @@ def check_destination(path: str | Path, kind: str, *, overwrite: bool = False) -
         kind may be replaced.
     overwrite
         Replace any existing regular file.
+    holding
+        ``(attribute, value)``: what the new file will hold (``("scene", scene.to_dict())``,
+        ``("study", ...)``). A file of ours of this kind is then replaced only if its
+        attribute holds the same (JSON) value: a re-run of the same scene, never another
+        scene's result.
 
     Raises
     ------
     OutputError
         Naming the path and the rule: the directory is missing, not a directory or not
         writable; the path is a directory or a special file; or an existing file is not ours
-        of this kind and ``overwrite`` is not set.
+        of this kind (or, with ``holding``, holds something else) and ``overwrite`` is not
+        set.
     """
     given = Path(path)
     try:
-        _check_destination(given, kind, overwrite)
+        _check_destination(given, kind, overwrite, holding)
     except OSError as exc:  # a name too long, a loop of links, ...
         raise OutputError(given, f"cannot be written ({_reason(exc)})") from exc
 
 
-def _check_destination(given: Path, kind: str, overwrite: bool) -> None:
+def _check_destination(
+    given: Path, kind: str, overwrite: bool, holding: tuple[str, Any] | None
+) -> None:
     if given.is_symlink():
         try:
             os.stat(given)
@@ -172,6 +187,34 @@ def _check_destination(given: Path, kind: str, overwrite: bool) -> None:
             f"exists and is {what}, not a {kind} file; refusing to replace it "
             "(choose another name, or pass --overwrite)",
         )
+    if holding is not None and (other := _holds_other(target, *holding)) is not None:
+        raise OutputError(
+            given,
+            f"exists and holds the {kind} of another {holding[0]} ({other}); refusing to "
+            "replace it (choose another name, or pass --overwrite)",
+        )
+
+
+def _holds_other(target: Path, attribute: str, value: Any) -> str | None:
+    """How the file's ``attribute`` differs from ``value`` (its title, or the first key that
+    differs), or None if it holds the same."""
+    import h5py
+
+    try:
+        with h5py.File(target, "r") as f:
+            stored = json.loads(f.attrs.get(attribute, "null"))
+    except Exception:  # noqa: BLE001 -- identified as ours just before: unreadable now
+        return f"its {attribute} cannot be read"
+    ours = json.loads(json.dumps(value))
+    if stored == ours:
+        return None
+    if not isinstance(stored, dict) or not isinstance(ours, dict):
+        return f"its {attribute} is not this one"
+    theirs, mine = stored.get("title"), ours.get("title")
+    if theirs != mine:
+        return f"title {theirs!r}, not {mine!r}"
+    key = next(k for k in sorted({*stored, *ours}) if stored.get(k) != ours.get(k))
+    return f"{theirs!r}, with another [{key}]"
 
 
 def file_id(path: str | Path) -> tuple[int, int] | None:

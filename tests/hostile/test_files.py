@@ -341,8 +341,38 @@ def test_our_result_file_is_replaced_and_a_foreign_one_only_when_told(hostile, s
 def test_symlink_to_our_file_writes_through(hostile, pristine, scene, tmp_path):
     target = _copy(pristine, "result", tmp_path)
     link = _link(tmp_path / "latest.h5", target)
-    hostile.run(["run", str(scene), "--out", str(link), "--no-progress"], expect="done")
+    # --overwrite: the target holds another scene's result.
+    argv = ["run", str(scene), "--out", str(link), "--no-progress", "--overwrite"]
+    hostile.run(argv, expect="done")
     assert link.is_symlink() and len(Result.load(target).t) == 3
+
+
+@pytest.mark.covers("option:run --out", "option:run --overwrite")
+def test_a_result_of_another_scene_is_not_replaced(hostile, pristine, scene, tmp_path):
+    """The same scene's file is replaced (a re-run); another scene's only with --overwrite,
+    the message naming both scenes' titles or the table that differs."""
+    out = _copy(pristine, "result", tmp_path)
+    before = out.read_bytes()
+    hostile.run(["run", str(scene), "--out", str(out)], expect="refused", field="another [output]")
+    assert out.read_bytes() == before
+    retitled = hostile.scene({**SCENE, "title": "another body"})
+    o = hostile.run(
+        ["run", str(retitled), "--out", str(out)], expect="refused", field="--overwrite"
+    )
+    assert "'hostile files', not 'another body'" in o.stderr
+    assert out.read_bytes() == before
+    hostile.run(["run", str(scene), "--out", str(out), "--overwrite"], expect="done", out=out)
+    assert len(Result.load(out).t) == 3
+
+
+@pytest.mark.covers("option:sweep --out", "option:sweep --overwrite")
+def test_a_sweep_of_another_study_is_not_replaced(hostile, pristine, tmp_path):
+    out = _copy(pristine, "sweep", tmp_path)
+    before = out.read_bytes()
+    study = ROOT / "examples" / "studies" / "free_body_grid.toml"
+    o = hostile.run(["sweep", str(study), "--out", str(out)], expect="refused", field="--overwrite")
+    assert "holds the sweep of another study" in o.stderr and o.seconds < 10
+    assert out.read_bytes() == before
 
 
 @pytest.mark.covers("option:run --out")
