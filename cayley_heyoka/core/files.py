@@ -36,7 +36,7 @@ import glob
 import hashlib
 import json
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -116,6 +116,7 @@ def check_destination(
     *,
     overwrite: bool = False,
     holding: tuple[str, Any] | None = None,
+    ignoring: Collection[str] = (),
 ) -> None:
     """Refuse, before any work, a destination that cannot or may not be written.
 
@@ -133,6 +134,9 @@ def check_destination(
         ``("study", ...)``). A file of ours of this kind is then replaced only if its
         attribute holds the same (JSON) value: a re-run of the same scene, never another
         scene's result.
+    ignoring
+        Top-level keys of that value not compared (a reference's ``integrator``, which it
+        chooses itself).
 
     Raises
     ------
@@ -144,13 +148,17 @@ def check_destination(
     """
     given = Path(path)
     try:
-        _check_destination(given, kind, overwrite, holding)
+        _check_destination(given, kind, overwrite, holding, ignoring)
     except OSError as exc:  # a name too long, a loop of links, ...
         raise OutputError(given, f"cannot be written ({_reason(exc)})") from exc
 
 
 def _check_destination(
-    given: Path, kind: str, overwrite: bool, holding: tuple[str, Any] | None
+    given: Path,
+    kind: str,
+    overwrite: bool,
+    holding: tuple[str, Any] | None,
+    ignoring: Collection[str] = (),
 ) -> None:
     if given.is_symlink():
         try:
@@ -187,7 +195,7 @@ def _check_destination(
             f"exists and is {what}, not a {kind} file; refusing to replace it "
             "(choose another name, or pass --overwrite)",
         )
-    if holding is not None and (other := _holds_other(target, *holding)) is not None:
+    if holding is not None and (other := _holds_other(target, *holding, ignoring)) is not None:
         raise OutputError(
             given,
             f"exists and holds the {kind} of another {holding[0]} ({other}); refusing to "
@@ -195,7 +203,7 @@ def _check_destination(
         )
 
 
-def _holds_other(target: Path, attribute: str, value: Any) -> str | None:
+def _holds_other(target: Path, attribute: str, value: Any, ignoring: Collection[str]) -> str | None:
     """How the file's ``attribute`` differs from ``value`` (its title, or the first key that
     differs), or None if it holds the same."""
     import h5py
@@ -206,6 +214,8 @@ def _holds_other(target: Path, attribute: str, value: Any) -> str | None:
     except Exception:  # noqa: BLE001 -- identified as ours just before: unreadable now
         return f"its {attribute} cannot be read"
     ours = json.loads(json.dumps(value))
+    if isinstance(stored, dict) and isinstance(ours, dict):
+        stored, ours = ({k: v for k, v in d.items() if k not in ignoring} for d in (stored, ours))
     if stored == ours:
         return None
     if not isinstance(stored, dict) or not isinstance(ours, dict):

@@ -216,7 +216,15 @@ def generate_reference(
 
     check_count(stretches)
     out = Path(out)
-    check_destination(out, "result", overwrite=overwrite)  # "." or "/": no name to add to
+    # "." or "/": no name to add to; another scene's result is not replaced (the reference
+    # chooses its own integrator).
+    check_destination(
+        out,
+        "result",
+        overwrite=overwrite,
+        holding=("scene", scene.to_dict()),
+        ignoring=("integrator",),
+    )
     workdir = Path(workdir) if workdir is not None else out.with_name(out.name + ".work")
     say = report or (lambda text: None)
     if method not in METHODS:

@@ -365,6 +365,21 @@ def test_a_result_of_another_scene_is_not_replaced(hostile, pristine, scene, tmp
     assert len(Result.load(out).t) == 3
 
 
+@pytest.mark.covers("option:reference --out", "option:reference --overwrite")
+def test_a_reference_does_not_replace_another_scenes_result(hostile, pristine, scene, tmp_path):
+    """A reference replaces a result of its own scene (whatever precision it was run at), not
+    another's."""
+    out = _copy(pristine, "result", tmp_path)
+    before = out.read_bytes()
+    argv = ["reference", str(scene), "--digits", "8", "--out", str(out)]
+    hostile.run(argv, expect="refused", field="--overwrite")
+    assert out.read_bytes() == before
+    own = tmp_path / "own.h5"
+    hostile.run(["run", str(scene), "--out", str(own), "--no-progress"], expect="done", out=own)
+    hostile.run(["reference", str(scene), "--digits", "8", "--out", str(own)], expect="done")
+    assert Result.load(own).metadata.get("reference")
+
+
 @pytest.mark.covers("option:sweep --out", "option:sweep --overwrite")
 def test_a_sweep_of_another_study_is_not_replaced(hostile, pristine, tmp_path):
     out = _copy(pristine, "sweep", tmp_path)
