@@ -279,3 +279,10 @@ def test_a_huge_angle_is_reduced_exactly(anomaly):
         a = el.elements_to_cartesian(el.Elements("1", "0.1", "0.3", "0.2", "0.4", anomaly), "1")
         b = el.elements_to_cartesian(el.Elements("1", "0.1", "0.3", "0.2", "0.4", reduced), "1")
         assert max(abs(u - w) for u, w in zip(a[0], b[0], strict=True)) < mpmath.mpf(10) ** -38
+
+
+def test_mpfr_precisions_are_named_by_their_bits_never_as_heyokas_quad():
+    """heyoka's ``real128`` is IEEE quad (113 bits); an MPFR precision of 128 bits is not it."""
+    assert Precision("quad").name == "quad"
+    assert Precision("real", 128).name == "mpfr128" and Precision("real", 256).name == "mpfr256"
+    assert all(Precision("real", b).name != "real128" for b in (113, 128))

@@ -9,7 +9,7 @@ precision in the attributes.
 multiprecision result gives object arrays of its own numbers (heyoka ``real128`` or ``real``),
 exact, with ``attrs["precision"]`` saying which; ``as_double=True`` asks for the float64 view
 explicitly, and the view then says ``precision = "double"`` and ``rounded_from = "quad"`` (or
-``"real256"``, …). Neither xarray nor pandas is needed by the library itself: they are imported
+``"mpfr256"``, …). Neither xarray nor pandas is needed by the library itself: they are imported
 when a view is asked for (``pip install "cayley_heyoka[xarray]"``).
 """
 

@@ -141,8 +141,10 @@ class Precision:
 
     @property
     def name(self) -> str:
-        """A short label: ``double``, ``quad`` or ``real256``."""
-        return f"real{self.bits}" if self.kind == "real" else self.kind
+        """A short label: ``double``, ``quad`` (IEEE binary128, heyoka's ``real128``) or, for
+        MPFR, ``mpfr`` and its bits (``mpfr128`` is not quad: it has 128 significand bits,
+        quad 113)."""
+        return f"mpfr{self.bits}" if self.kind == "real" else self.kind
 
     @property
     def fp_type(self) -> type:
