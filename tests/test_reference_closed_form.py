@@ -254,7 +254,7 @@ def test_ctrl_c_ends_workers_and_the_same_command_resumes_to_the_same_bits(tmp_p
         *("--digits", "30", "--out", str(out), "--no-progress"),
     ]
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    store = tmp_path / "ref.h5.work" / "closed-form-real128"
+    store = tmp_path / "ref.h5.work" / "closed-form-mpfr128"
     proc = subprocess.Popen(
         command, env=env, start_new_session=True, stderr=subprocess.PIPE, text=True
     )

@@ -248,7 +248,7 @@ def test_two_precision_certificate_catches_a_loose_run_and_escalates(tmp_path):
     assert first["precision"] == "quad" and first["scaled_error"] > 1e-15
     assert out.certified and len(out.attempts) == 2
     assert last["precision"] != "quad" and last["scaled_error"] <= 1e-20
-    assert ch.load_result(out.path).precision.bits > int(last["precision"].removeprefix("real"))
+    assert ch.load_result(out.path).precision.bits > int(last["precision"].removeprefix("mpfr"))
 
 
 def test_failed_run_is_reported_not_certified(tmp_path, capsys):

@@ -87,7 +87,7 @@ def test_quad_against_quad_resolves_1e_30(quad_run):
 def test_mixed_quad_and_multiprecision_compare_in_the_higher_precision(quad_run):
     real = ch.run(ch.Scene.from_dict(free_body(integrator={"precision": {"bits": 256}})))
     assert_trajectory_close(quad_run, real, rtol=1e-30, atol=1e-30)
-    with pytest.raises(AssertionError, match=r"quad vs real256"):
+    with pytest.raises(AssertionError, match=r"quad vs mpfr256"):
         assert_trajectory_close(quad_run, real, rtol=0, atol=1e-45)
 
 

@@ -60,7 +60,11 @@ def _sweep(args: argparse.Namespace) -> int:
     try:
         if args.out:  # a sweep of another study is not replaced without --overwrite
             check_destination(
-                args.out, "sweep", overwrite=args.overwrite, holding=("study", study.to_dict())
+                args.out,
+                "sweep",
+                overwrite=args.overwrite,
+                holding=("study", study.to_dict()),
+                ignoring=("run",),  # where and how it runs: the same study
             )
     except OutputError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -263,7 +263,7 @@ def test_multiprecision_number_beyond_double_is_refused_and_tiny_ones_round():
     big = Result(t=prec.array(["0"]), variables={"y": prec.array(["1e400"])}, precision=prec)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with pytest.raises(ValueError, match=r"y in real128: \[0\] is 1\.0*e\+400"):
+        with pytest.raises(ValueError, match=r"y in mpfr128: \[0\] is 1\.0*e\+400"):
             big.to_xarray(as_double=True)
     y = prec.array(["1e-400", "-3e-320", "0", "0"])
     y[2], y[3] = hy.real("nan", 128), hy.real("-inf", 128)

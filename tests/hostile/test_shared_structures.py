@@ -63,10 +63,10 @@ def test_members_whose_numbers_are_compiled_in_each_take_their_own_equations(hos
     hostile.run(["sweep", str(study), "--out", str(out)], expect="refused",
                 field="forces.heavy_top.up")  # fmt: skip
     assert not out.exists()
-    for up in ups:  # one vertical a sweep: its own structure, the run of its scene
+    for k, up in enumerate(ups):  # one vertical a sweep: its own structure, its scene's run
         data = {**scene, "forces": {"heavy_top": {**scene["forces"]["heavy_top"], "up": up}}}
         parameters = {"initial.rates[2]": [4.0, 3.0]}
-        swept_out = tmp_path / f"s{up[0]}.h5"
+        swept_out = tmp_path / f"s{k}.h5"
         hostile.run(["sweep", _study(hostile, data, parameters), "--out", str(swept_out)],
                     expect="done", out=swept_out)  # fmt: skip
         swept = ch.load_sweep(swept_out)
