@@ -174,9 +174,9 @@ class Result:
         return relative_drift(m[None], vector=m.ndim > 1)[0]
 
     def largest_drift(self, name: str) -> tuple[float, Any]:
-        """The largest |relative drift| of a monitor over the run (largest component of a
-        vector) and the output time where it occurs (the first, if several; NaN drifts are
-        skipped).
+        """The largest magnitude of a monitor's relative drift over the run (largest component
+        of a vector) and the output time where it occurs (the first, if several; NaN drifts
+        are skipped).
 
         Examples
         --------
