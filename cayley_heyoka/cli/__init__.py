@@ -126,7 +126,10 @@ OVERWRITE_HELP = "replace --out even if it is not a file of ours of the same kin
 
 
 def destination(
-    args: argparse.Namespace, kind: str, holding: tuple[str, Any] | None = None
+    args: argparse.Namespace,
+    kind: str,
+    holding: tuple[str, Any] | None = None,
+    ignoring: tuple[str, ...] = (),
 ) -> bool:
     """Refuse ``--out`` up front (printing why) if it cannot or may not be written, or with
     ``holding`` if it holds another scene's file (:func:`.core.files.check_destination`)."""
@@ -135,7 +138,9 @@ def destination(
     from ..core.files import OutputError, check_destination
 
     try:
-        check_destination(args.out, kind, overwrite=args.overwrite, holding=holding)
+        check_destination(
+            args.out, kind, overwrite=args.overwrite, holding=holding, ignoring=ignoring
+        )
     except OutputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return False

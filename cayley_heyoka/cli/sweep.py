@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from . import add_progress, show_progress
+from . import add_progress, destination, show_progress
 
 # The backends, written here so that building the parser imports nothing of the sweep;
 # tests/test_cli_imports.py holds them equal to study.BACKENDS.
@@ -57,17 +57,9 @@ def _sweep(args: argparse.Namespace) -> int:
     except (SceneError, OSError) as exc:
         print(f"error: {args.study}: {exc}", file=sys.stderr)
         return 2
-    try:
-        if args.out:  # a sweep of another study is not replaced without --overwrite
-            check_destination(
-                args.out,
-                "sweep",
-                overwrite=args.overwrite,
-                holding=("study", study.to_dict()),
-                ignoring=("run",),  # where and how it runs: the same study
-            )
-    except OutputError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+    # A sweep of another study is not replaced; its [run] table (where and how it runs) is not
+    # what it is.
+    if not destination(args, "sweep", holding=("study", study.to_dict()), ignoring=("run",)):
         return 2
     from ..workflows.sweep import run_sweep  # heyoka: only once the study is known to be good
 

@@ -365,6 +365,18 @@ def test_a_result_of_another_scene_is_not_replaced(hostile, pristine, scene, tmp
     assert len(Result.load(out).t) == 3
 
 
+@pytest.mark.covers("option:run --out")
+def test_a_result_whose_scene_cannot_be_read_is_not_replaced(hostile, pristine, scene, tmp_path):
+    """A file of ours whose stored scene is not JSON (edited by hand) is refused, not replaced."""
+    out = _copy(pristine, "result", tmp_path)
+    with h5py.File(out, "r+") as f:
+        f.attrs["scene"] = "{not json"
+    before = out.read_bytes()
+    o = hostile.run(["run", str(scene), "--out", str(out)], expect="refused", field="--overwrite")
+    assert "its scene cannot be read" in o.stderr
+    assert out.read_bytes() == before
+
+
 @pytest.mark.covers("option:reference --out", "option:reference --overwrite")
 def test_a_reference_does_not_replace_another_scenes_result(hostile, pristine, scene, tmp_path):
     """A reference replaces a result of its own scene (whatever precision it was run at), not
